@@ -1,0 +1,125 @@
+//! Job states and the request/response types of the HTTP API (`api.md`).
+//! The service extends this module; these types are the contract.
+
+use std::collections::BTreeMap;
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use crate::results::{Progress, Summary};
+use crate::scene::Scene;
+
+/// State of a job.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum JobStatus {
+    /// Waiting for a worker.
+    Queued,
+    /// Claimed by a worker.
+    Running,
+    /// Finished normally.
+    Completed,
+    /// Finished with an error; see the message.
+    Failed,
+    /// Cancelled on request.
+    Cancelled,
+}
+
+impl JobStatus {
+    /// The name used in the API and the store.
+    pub fn as_str(self) -> &'static str {
+        match self {
+            JobStatus::Queued => "queued",
+            JobStatus::Running => "running",
+            JobStatus::Completed => "completed",
+            JobStatus::Failed => "failed",
+            JobStatus::Cancelled => "cancelled",
+        }
+    }
+    /// Parse a status name.
+    pub fn parse(s: &str) -> Option<JobStatus> {
+        [
+            JobStatus::Queued,
+            JobStatus::Running,
+            JobStatus::Completed,
+            JobStatus::Failed,
+            JobStatus::Cancelled,
+        ]
+        .into_iter()
+        .find(|j| j.as_str() == s)
+    }
+    /// Whether the job has ended.
+    pub fn is_terminal(self) -> bool {
+        matches!(
+            self,
+            JobStatus::Completed | JobStatus::Failed | JobStatus::Cancelled
+        )
+    }
+}
+
+/// The wrapped form of `POST /api/v1/jobs`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct JobRequest {
+    /// The scene to run.
+    pub scene: Scene,
+    /// Higher runs first.
+    #[serde(default)]
+    pub priority: i64,
+    /// Free labels, e.g. `{"sweep": "toughness"}`.
+    #[serde(default)]
+    pub labels: BTreeMap<String, String>,
+}
+
+/// A job as the API returns it.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct JobInfo {
+    /// Job id.
+    pub id: String,
+    /// Current state.
+    pub status: JobStatus,
+    /// Scene name.
+    pub name: String,
+    /// Labels.
+    pub labels: BTreeMap<String, String>,
+    /// Priority.
+    pub priority: i64,
+    /// The scene (omitted in lists).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scene: Option<Scene>,
+    /// RFC 3339 UTC.
+    pub created_at: String,
+    /// RFC 3339 UTC.
+    pub started_at: Option<String>,
+    /// RFC 3339 UTC.
+    pub finished_at: Option<String>,
+    /// How many times a worker has claimed the job.
+    pub attempts: u32,
+    /// Progress of the run.
+    pub progress: Option<Progress>,
+    /// The run summary once finished.
+    pub summary: Option<Summary>,
+    /// Why the job failed or was cancelled.
+    pub message: Option<String>,
+}
+
+/// One problem in an error body.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct ErrorDetail {
+    /// JSON path of the offending field, e.g. `materials.plate.poissons_ratio`.
+    pub path: String,
+    /// What is wrong with it.
+    pub message: String,
+}
+
+/// The body of every API error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct ErrorBody {
+    /// Kind of error, e.g. `invalid_scene`, `not_found`.
+    pub error: String,
+    /// Human-readable explanation.
+    pub message: String,
+    /// Per-field problems.
+    #[serde(default)]
+    pub details: Vec<ErrorDetail>,
+}

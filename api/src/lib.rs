@@ -1,0 +1,22 @@
+//! The public data model of mpm-fracture.
+//!
+//! * [`scene`]: the scene document (`../shared/design/scene-format.md`), with serde defaults,
+//!   `deny_unknown_fields` and a JSON Schema.
+//! * [`validate`]: validation of a scene, reporting every problem with its JSON path and value.
+//! * [`results`]: the rows and files a run produces (`run-output.md`): energy and crack-tip
+//!   history rows, field snapshots, the run summary.
+//! * [`jobs`]: job states and the request/response types of the HTTP API (`api.md`).
+//!
+//! This crate does no IO and knows nothing of HTTP or SQL.
+
+pub mod jobs;
+pub mod lattice;
+pub mod results;
+pub mod scene;
+pub mod validate;
+
+pub use scene::Scene;
+pub use validate::{RunSize, ValidationError, ValidationErrors};
+
+/// Version string of the solver and data model, recorded in every run summary.
+pub const SOLVER_VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -1,0 +1,202 @@
+//! What a run produces (`run-output.md`): history rows, field snapshots and the summary.
+//! The same types travel from a worker to the server and from the server to clients.
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// Column header of `energy.csv`.
+pub const ENERGY_CSV_HEADER: &str = "time,kinetic,strain,external_work,dissipated,total_error";
+/// Column header of `crack_tips.csv`.
+pub const CRACK_TIPS_CSV_HEADER: &str = "time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing";
+
+/// One energy sample (J per the scene's thickness).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+pub struct EnergyRow {
+    /// Simulated time (s).
+    pub time: f64,
+    /// Kinetic energy Σ ½ m |v|².
+    pub kinetic: f64,
+    /// Strain energy Σ V W.
+    pub strain: f64,
+    /// Work done on the body by boundary conditions and loads.
+    pub external_work: f64,
+    /// Energy removed by friction, damping and crack growth.
+    pub dissipated: f64,
+    /// kinetic + strain + dissipated − external_work − initial total.
+    pub total_error: f64,
+}
+
+impl EnergyRow {
+    /// The row as a CSV line (no newline), columns as [`ENERGY_CSV_HEADER`].
+    pub fn to_csv(&self) -> String {
+        format!(
+            "{:e},{:e},{:e},{:e},{:e},{:e}",
+            self.time,
+            self.kinetic,
+            self.strain,
+            self.external_work,
+            self.dissipated,
+            self.total_error
+        )
+    }
+}
+
+/// One crack-tip sample.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+pub struct CrackTipRow {
+    /// Simulated time (s).
+    pub time: f64,
+    /// Index into `scene.cracks`.
+    pub crack: u32,
+    /// 0 for the start of the polyline, 1 for its end.
+    pub tip: u32,
+    /// Tip position x (m).
+    pub x: f64,
+    /// Tip position y (m).
+    pub y: f64,
+    /// Current crack length along its path (m).
+    pub length: f64,
+    /// Tip speed (m/s), moving-box average over `output.speed_window`.
+    pub speed: f64,
+    /// J along the crack (J/m²), tip frame.
+    pub j1: f64,
+    /// J normal to the crack (J/m²), positive to the crack's left.
+    pub j2: f64,
+    /// Mode I stress intensity factor (Pa·√m).
+    pub k1: f64,
+    /// Mode II stress intensity factor (Pa·√m).
+    pub k2: f64,
+    /// Whether the tip advanced in this sample's step.
+    pub growing: bool,
+}
+
+impl CrackTipRow {
+    /// The row as a CSV line (no newline), columns as [`CRACK_TIPS_CSV_HEADER`].
+    pub fn to_csv(&self) -> String {
+        format!(
+            "{:e},{},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
+            self.time,
+            self.crack,
+            self.tip,
+            self.x,
+            self.y,
+            self.length,
+            self.speed,
+            self.j1,
+            self.j2,
+            self.k1,
+            self.k2,
+            u8::from(self.growing)
+        )
+    }
+}
+
+/// Final state of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum RunStatus {
+    /// Reached the end time.
+    Completed,
+    /// Stopped by a numerical failure or an error; see the message.
+    Failed,
+    /// Stopped on request.
+    Cancelled,
+}
+
+/// `summary.json`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct Summary {
+    /// How the run ended.
+    pub status: RunStatus,
+    /// Why, when not completed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub message: Option<String>,
+    /// Time steps taken.
+    pub steps: u64,
+    /// Δt (s).
+    pub time_step: f64,
+    /// Simulated time reached (s).
+    pub sim_time: f64,
+    /// Number of particles.
+    pub particles: u64,
+    /// Number of grid nodes in the box.
+    pub grid_nodes: u64,
+    /// Mean number of active (particle-touched) nodes per step.
+    pub active_nodes_mean: f64,
+    /// Wall-clock seconds of the time loop.
+    pub wall_seconds: f64,
+    /// particles × steps / wall_seconds.
+    pub particle_steps_per_second: f64,
+    /// Threads the solver used.
+    pub threads: u32,
+    /// SHA-256 of the canonical scene JSON.
+    pub scene_hash: String,
+    /// Version of the solver.
+    pub solver_version: String,
+}
+
+/// Progress of a run.
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+pub struct Progress {
+    /// Steps taken.
+    pub step: u64,
+    /// Simulated time (s).
+    pub sim_time: f64,
+    /// End time (s).
+    pub end_time: f64,
+    /// sim_time / end_time, in [0, 1].
+    pub fraction: f64,
+}
+
+/// One field component of a snapshot, sampled at the grid nodes.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct FieldComponent {
+    /// Component name, e.g. `sxx`, `vx`, `speed`, `fringe`.
+    pub name: String,
+    /// Values at the nodes, row-major from the lower-left node: index = iy·nx + ix.
+    /// NaN where no material touches the node.
+    pub values: Vec<f32>,
+}
+
+/// A field snapshot: node-sampled fields plus the crack geometry at that time.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct Snapshot {
+    /// Index of the snapshot in its run (0, 1, …).
+    pub index: u32,
+    /// Simulated time (s).
+    pub time: f64,
+    /// Nodes in x.
+    pub nx: u32,
+    /// Nodes in y.
+    pub ny: u32,
+    /// Position of node (0, 0).
+    pub origin: [f64; 2],
+    /// Node spacing (m).
+    pub cell_size: f64,
+    /// Field kinds recorded (names as in the scene's `output.fields`).
+    pub fields: Vec<String>,
+    /// The components of those fields.
+    pub components: Vec<FieldComponent>,
+    /// Each crack's line as a polyline (m).
+    pub cracks: Vec<Vec<[f64; 2]>>,
+}
+
+impl Snapshot {
+    /// The component with this name.
+    pub fn component(&self, name: &str) -> Option<&FieldComponent> {
+        self.components.iter().find(|c| c.name == name)
+    }
+}
+
+/// The components each field kind produces, in order.
+pub fn field_components(kind: crate::scene::FieldKind) -> &'static [&'static str] {
+    use crate::scene::FieldKind::*;
+    match kind {
+        Stress => &["sxx", "syy", "sxy"],
+        Strain => &["exx", "eyy", "exy"],
+        Velocity => &["vx", "vy", "speed"],
+        Displacement => &["ux", "uy"],
+        Fringe => &["fringe"],
+        Material => &["material"],
+    }
+}

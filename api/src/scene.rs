@@ -1,0 +1,599 @@
+//! The scene document: everything a run needs, in SI units (m, s, kg, Pa, J/m²).
+//!
+//! Field names and defaults are the public contract of `scene-format.md`. Extensions made by
+//! this project are marked "(extension)" and documented in `docs/scene-extensions.md`; every
+//! extension has a default, so a scene written against the shared contract means the same.
+
+use std::collections::BTreeMap;
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+/// A 2D point or vector `[x, y]`.
+pub type Vec2 = [f64; 2];
+
+/// A complete simulation scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Scene {
+    /// Short name of the scene (used as the run's name).
+    #[serde(default = "default_name")]
+    pub name: String,
+    /// Free text describing the scene and its modelling choices.
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub description: String,
+    /// 2D stress state.
+    #[serde(default)]
+    pub analysis: Analysis,
+    /// Out-of-plane thickness (m). Forces, energies and tractions are per this thickness;
+    /// J and K are per unit thickness regardless.
+    #[serde(default = "one")]
+    pub thickness: f64,
+    /// The background grid.
+    pub grid: GridSpec,
+    /// Materials by name.
+    pub materials: BTreeMap<String, Material>,
+    /// Bodies filled with particles.
+    pub bodies: Vec<Body>,
+    /// Explicit cracks.
+    #[serde(default)]
+    pub cracks: Vec<Crack>,
+    /// Prescribed grid velocities.
+    #[serde(default)]
+    pub boundary_conditions: Vec<BoundaryCondition>,
+    /// Tractions on particles.
+    #[serde(default)]
+    pub loads: Vec<Load>,
+    /// Damping for quasi-static runs.
+    #[serde(default)]
+    pub damping: Damping,
+    /// End time and time step control.
+    pub time: TimeControl,
+    /// What is recorded and how often.
+    #[serde(default)]
+    pub output: Output,
+}
+
+fn default_name() -> String {
+    "untitled".to_string()
+}
+fn one() -> f64 {
+    1.0
+}
+
+/// The 2D stress state.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum Analysis {
+    /// Plane strain (ε_zz = 0, σ_zz = ν(σ_xx + σ_yy)).
+    #[default]
+    PlaneStrain,
+    /// Plane stress (σ_zz = 0).
+    PlaneStress,
+    /// Reserved for a future 3D solver; rejected by validation.
+    #[serde(rename = "3d")]
+    ThreeD,
+}
+
+/// The background grid.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct GridSpec {
+    /// Edge of the square cells (m).
+    pub cell_size: f64,
+    /// Lower-left corner of the grid box.
+    pub min: Vec2,
+    /// Upper-right corner of the grid box.
+    pub max: Vec2,
+    /// Shape functions.
+    #[serde(default)]
+    pub shape_function: ShapeFunction,
+}
+
+/// Particle–grid shape functions.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum ShapeFunction {
+    /// Uniform GIMP (Bardenhagen & Kober 2004), particle domain fixed at its undeformed size.
+    #[default]
+    Gimp,
+    /// Classic MPM bilinear shape functions.
+    Linear,
+}
+
+/// A material model with its constants.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "model", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Material {
+    /// Small-strain isotropic linear elasticity (hypoelastic rate form).
+    LinearElastic {
+        /// Mass density ρ (kg/m³).
+        density: f64,
+        /// Young's modulus E (Pa).
+        youngs_modulus: f64,
+        /// Poisson's ratio ν, in (-1, 0.5).
+        poissons_ratio: f64,
+    },
+}
+
+impl Material {
+    /// Mass density (kg/m³).
+    pub fn density(&self) -> f64 {
+        match self {
+            Material::LinearElastic { density, .. } => *density,
+        }
+    }
+    /// Young's modulus (Pa).
+    pub fn youngs_modulus(&self) -> f64 {
+        match self {
+            Material::LinearElastic { youngs_modulus, .. } => *youngs_modulus,
+        }
+    }
+    /// Poisson's ratio.
+    pub fn poissons_ratio(&self) -> f64 {
+        match self {
+            Material::LinearElastic { poissons_ratio, .. } => *poissons_ratio,
+        }
+    }
+    /// Elastic wave speeds of this material in the given 2D state.
+    pub fn wave_speeds(&self, analysis: Analysis) -> WaveSpeeds {
+        WaveSpeeds::new(
+            self.youngs_modulus(),
+            self.poissons_ratio(),
+            self.density(),
+            analysis,
+        )
+    }
+}
+
+/// Dilatational, shear and Rayleigh wave speeds (m/s) of an isotropic elastic material.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct WaveSpeeds {
+    /// Dilatational speed c_L of the 2D state (plane strain: the bulk P-wave speed; plane
+    /// stress: the thin-plate speed sqrt(E/(ρ(1−ν²)))).
+    pub c_l: f64,
+    /// Shear speed c_S.
+    pub c_s: f64,
+    /// Rayleigh speed c_R, the exact root of the Rayleigh equation.
+    pub c_r: f64,
+}
+
+impl WaveSpeeds {
+    /// Wave speeds for E, ν, ρ in the given 2D state.
+    pub fn new(e: f64, nu: f64, rho: f64, analysis: Analysis) -> Self {
+        let c_s = (e / (2.0 * (1.0 + nu) * rho)).sqrt();
+        let c_l = match analysis {
+            Analysis::PlaneStress => (e / (rho * (1.0 - nu * nu))).sqrt(),
+            _ => (e * (1.0 - nu) / (rho * (1.0 + nu) * (1.0 - 2.0 * nu))).sqrt(),
+        };
+        let c_r = rayleigh_speed(c_l, c_s);
+        WaveSpeeds { c_l, c_s, c_r }
+    }
+}
+
+/// The Rayleigh wave speed: x = (c_R/c_S)² is the root in (0, 1) of
+/// (2 − x)² = 4·sqrt(1 − x)·sqrt(1 − κx), κ = (c_S/c_L)² (`reference-solutions.md`).
+/// Solved by bisection to machine precision (no fitted approximation).
+pub fn rayleigh_speed(c_l: f64, c_s: f64) -> f64 {
+    let kappa = (c_s / c_l).powi(2);
+    let f = |x: f64| (2.0 - x).powi(2) - 4.0 * (1.0 - x).sqrt() * (1.0 - kappa * x).sqrt();
+    // f(0) = 0 is the trivial root; f is negative just above 0 and f(1) = 1 > 0.
+    let (mut lo, mut hi) = (1e-6, 1.0);
+    for _ in 0..200 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) > 0.0 {
+            hi = mid;
+        } else {
+            lo = mid;
+        }
+    }
+    c_s * (0.5 * (lo + hi)).sqrt()
+}
+
+/// A region of the plane.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case", deny_unknown_fields)]
+pub enum Region {
+    /// Axis-aligned rectangle.
+    Rectangle {
+        /// Lower-left corner.
+        min: Vec2,
+        /// Upper-right corner.
+        max: Vec2,
+    },
+    /// Disc.
+    Circle {
+        /// Centre.
+        center: Vec2,
+        /// Radius (m).
+        radius: f64,
+    },
+    /// Closed polygon, either orientation.
+    Polygon {
+        /// Vertices.
+        points: Vec<Vec2>,
+    },
+}
+
+impl Region {
+    /// Whether `p` lies inside the region (boundary points count as inside for rectangles
+    /// and circles; polygons use the even-odd rule).
+    pub fn contains(&self, p: Vec2) -> bool {
+        match self {
+            Region::Rectangle { min, max } => {
+                p[0] >= min[0] && p[0] <= max[0] && p[1] >= min[1] && p[1] <= max[1]
+            }
+            Region::Circle { center, radius } => {
+                let dx = p[0] - center[0];
+                let dy = p[1] - center[1];
+                dx * dx + dy * dy <= radius * radius
+            }
+            Region::Polygon { points } => {
+                let n = points.len();
+                let mut inside = false;
+                let mut j = n.wrapping_sub(1);
+                for i in 0..n {
+                    let (a, b) = (points[i], points[j]);
+                    if (a[1] > p[1]) != (b[1] > p[1]) {
+                        let x = a[0] + (p[1] - a[1]) * (b[0] - a[0]) / (b[1] - a[1]);
+                        if p[0] < x {
+                            inside = !inside;
+                        }
+                    }
+                    j = i;
+                }
+                inside
+            }
+        }
+    }
+
+    /// Axis-aligned bounding box `(min, max)`.
+    pub fn bounds(&self) -> (Vec2, Vec2) {
+        match self {
+            Region::Rectangle { min, max } => (*min, *max),
+            Region::Circle { center, radius } => (
+                [center[0] - radius, center[1] - radius],
+                [center[0] + radius, center[1] + radius],
+            ),
+            Region::Polygon { points } => {
+                let mut lo = [f64::INFINITY; 2];
+                let mut hi = [f64::NEG_INFINITY; 2];
+                for p in points {
+                    for k in 0..2 {
+                        lo[k] = lo[k].min(p[k]);
+                        hi[k] = hi[k].max(p[k]);
+                    }
+                }
+                (lo, hi)
+            }
+        }
+    }
+}
+
+/// A body: a region filled with particles of one material.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Body {
+    /// Name of a material in `materials`.
+    pub material: String,
+    /// The region the particles fill.
+    pub region: Region,
+    /// Particles per cell in each direction (2 → 4 particles per cell).
+    #[serde(default = "two_u32")]
+    pub particles_per_cell: u32,
+    /// Uniform initial velocity (m/s).
+    #[serde(default)]
+    pub initial_velocity: Vec2,
+}
+
+fn two_u32() -> u32 {
+    2
+}
+
+/// An explicit crack.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Crack {
+    /// Polyline of at least two points. Its ends are crack tips, except an end outside every
+    /// body (an edge crack's mouth).
+    pub points: Vec<Vec2>,
+    /// Crack-face contact law.
+    #[serde(default)]
+    pub contact: ContactLaw,
+    /// Propagation criterion.
+    #[serde(default)]
+    pub propagation: Propagation,
+    /// (extension) Half-size of the square J-integral contour, in cells (default 2, as
+    /// NairnMPM). Must be at least 1.
+    #[serde(default = "default_contour")]
+    pub j_contour: u32,
+}
+
+fn default_contour() -> u32 {
+    2
+}
+
+/// Crack-face contact law.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "law", rename_all = "snake_case", deny_unknown_fields)]
+pub enum ContactLaw {
+    /// Faces cannot interpenetrate; no tangential force.
+    #[default]
+    Frictionless,
+    /// Faces move together (bonded) wherever both fields are present.
+    Stick,
+    /// Coulomb friction: sliding when |τ| > μ|σ_n|.
+    Coulomb {
+        /// Friction coefficient μ ≥ 0.
+        friction: f64,
+    },
+}
+
+/// Crack propagation.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "criterion", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Propagation {
+    /// Stationary crack; J and K are still reported.
+    #[default]
+    None,
+    /// Grow while the energy release rate G reaches the toughness.
+    EnergyRelease {
+        /// Critical energy release rate (J/m²).
+        toughness: f64,
+        /// Growth direction.
+        #[serde(default)]
+        direction: GrowthDirection,
+        /// Growth speed law.
+        #[serde(default)]
+        speed: GrowthSpeed,
+    },
+}
+
+/// Direction in which a tip grows.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum GrowthDirection {
+    /// θ = atan2(J2, J1) in the tip frame; G = sqrt(J1² + J2²).
+    #[default]
+    MaxEnergyRelease,
+    /// Growth constrained along a fixed global direction; G = J1 cosθ + J2 sinθ along it.
+    Fixed(Vec2),
+}
+
+/// How fast a tip advances while it grows.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum GrowthSpeed {
+    /// The seed's rule: the tip moves at C_L during a time step in which G ≥ toughness.
+    #[default]
+    Wave,
+}
+
+/// Prescribed velocity on the grid nodes inside a region.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct BoundaryCondition {
+    /// Nodes inside this region are constrained.
+    pub region: Region,
+    /// Prescribed components; a missing one is free.
+    pub velocity: VelocitySpec,
+    /// Velocity rises linearly from 0 over this time (s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ramp_time: Option<f64>,
+    /// Condition is active from this time (s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub start: Option<f64>,
+    /// Condition is active until this time (s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub end: Option<f64>,
+}
+
+/// Prescribed velocity components (m/s).
+#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct VelocitySpec {
+    /// x component, if prescribed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub x: Option<f64>,
+    /// y component, if prescribed.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub y: Option<f64>,
+}
+
+/// A traction applied to the particles inside a region.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Load {
+    /// The particles inside this region carry the traction.
+    pub region: Region,
+    /// Traction `[tx, ty]` (Pa), applied as traction × particle edge length × thickness.
+    pub traction: Vec2,
+    /// Linear rise from 0 over this time (s).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub ramp_time: Option<f64>,
+}
+
+/// Damping for quasi-static runs.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "kind", rename_all = "snake_case", deny_unknown_fields)]
+pub enum Damping {
+    /// No damping (default).
+    #[default]
+    None,
+    /// Local non-viscous ("kinetic") damping: each grid force component is reduced by
+    /// `coefficient`·|f| against the node's velocity, coefficient in [0, 1).
+    Kinetic {
+        /// Fraction of the unbalanced force removed, in [0, 1).
+        coefficient: f64,
+    },
+    /// Viscous (mass-proportional) damping: a grid force −`coefficient`·m·v.
+    Viscous {
+        /// Damping rate α (1/s).
+        coefficient: f64,
+    },
+}
+
+/// End time and time step.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct TimeControl {
+    /// Simulated end time (s).
+    pub end: f64,
+    /// Courant number: Δt = cfl·cell_size/C_L, in (0, 1].
+    #[serde(default = "default_cfl")]
+    pub cfl: f64,
+}
+
+fn default_cfl() -> f64 {
+    0.5
+}
+
+/// A field that can be recorded in snapshots.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum FieldKind {
+    /// σ_xx, σ_yy, σ_xy (Pa).
+    Stress,
+    /// ε_xx, ε_yy, ε_xy.
+    Strain,
+    /// v_x, v_y and |v| (m/s).
+    Velocity,
+    /// u_x, u_y (m).
+    Displacement,
+    /// Isochromatic fringe order N = h(σ₁ − σ₂)/f_σ.
+    Fringe,
+    /// Material index.
+    Material,
+}
+
+impl FieldKind {
+    /// Every field kind.
+    pub const ALL: [FieldKind; 6] = [
+        FieldKind::Stress,
+        FieldKind::Strain,
+        FieldKind::Velocity,
+        FieldKind::Displacement,
+        FieldKind::Fringe,
+        FieldKind::Material,
+    ];
+    /// The name used in scenes, URLs and files.
+    pub fn name(self) -> &'static str {
+        match self {
+            FieldKind::Stress => "stress",
+            FieldKind::Strain => "strain",
+            FieldKind::Velocity => "velocity",
+            FieldKind::Displacement => "displacement",
+            FieldKind::Fringe => "fringe",
+            FieldKind::Material => "material",
+        }
+    }
+    /// Parse a field name.
+    pub fn from_name(name: &str) -> Option<FieldKind> {
+        FieldKind::ALL.into_iter().find(|k| k.name() == name)
+    }
+}
+
+/// What is recorded and how often.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Output {
+    /// Interval between crack-tip and energy samples (s). Absent: every step.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub history_interval: Option<f64>,
+    /// Interval between field snapshots (s). 0 or absent: none.
+    #[serde(default)]
+    pub snapshot_interval: f64,
+    /// Fields recorded in snapshots (default: stress and velocity).
+    #[serde(default = "default_fields")]
+    pub fields: Vec<FieldKind>,
+    /// Stress-optic (fringe) constant f_σ (N/m), required for the `fringe` field.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fringe_constant: Option<f64>,
+    /// Width of the moving-box average of the crack-tip speed (s).
+    #[serde(default = "default_speed_window")]
+    pub speed_window: f64,
+}
+
+fn default_fields() -> Vec<FieldKind> {
+    vec![FieldKind::Stress, FieldKind::Velocity]
+}
+fn default_speed_window() -> f64 {
+    1.0e-6
+}
+
+impl Default for Output {
+    fn default() -> Self {
+        Output {
+            history_interval: None,
+            snapshot_interval: 0.0,
+            fields: default_fields(),
+            fringe_constant: None,
+            speed_window: default_speed_window(),
+        }
+    }
+}
+
+impl Scene {
+    /// Parse a scene from JSON text. Errors carry serde's message with line and column.
+    pub fn from_json(text: &str) -> Result<Scene, serde_json::Error> {
+        serde_json::from_str(text)
+    }
+
+    /// The JSON Schema of the scene document.
+    pub fn json_schema() -> serde_json::Value {
+        let schema = schemars::schema_for!(Scene);
+        serde_json::to_value(&schema).unwrap_or(serde_json::Value::Null)
+    }
+
+    /// The canonical JSON of the scene (all defaults filled in, keys in a fixed order).
+    pub fn canonical_json(&self) -> String {
+        // Struct fields serialize in declaration order and maps are BTreeMaps: stable.
+        serde_json::to_string(self).unwrap_or_default()
+    }
+
+    /// SHA-256 of the canonical JSON, hex encoded (the `scene_hash` of a run summary).
+    pub fn hash(&self) -> String {
+        use sha2::{Digest, Sha256};
+        let digest = Sha256::digest(self.canonical_json().as_bytes());
+        digest.iter().map(|b| format!("{b:02x}")).collect()
+    }
+
+    /// The time step Δt = cfl·h/C_L with the largest C_L over the materials, or `None`
+    /// when there are no valid materials.
+    pub fn time_step(&self) -> Option<f64> {
+        let c_max = self
+            .materials
+            .values()
+            .map(|m| m.wave_speeds(self.analysis).c_l)
+            .filter(|c| c.is_finite() && *c > 0.0)
+            .fold(0.0_f64, f64::max);
+        (c_max > 0.0).then(|| self.time.cfl * self.grid.cell_size / c_max)
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn homalite_wave_speeds_match_reference() {
+        // reference-solutions.md: dynamic Homalite, c_S = 1256, c_L = 2551 (pe) / 2186 (ps),
+        // c_R = 1172 (pe) / 1156 (ps), all to the quoted digits (±1 m/s).
+        let pe = WaveSpeeds::new(5.2e9, 0.34, 1230.0, Analysis::PlaneStrain);
+        let ps = WaveSpeeds::new(5.2e9, 0.34, 1230.0, Analysis::PlaneStress);
+        assert!((pe.c_s - 1256.0).abs() < 1.0, "{pe:?}");
+        assert!((pe.c_l - 2551.0).abs() < 1.0, "{pe:?}");
+        assert!((ps.c_l - 2186.0).abs() < 1.0, "{ps:?}");
+        assert!((pe.c_r - 1172.0).abs() < 1.0, "{pe:?}");
+        assert!((ps.c_r - 1156.0).abs() < 1.0, "{ps:?}");
+    }
+
+    #[test]
+    fn polygon_contains_even_odd() {
+        let r = Region::Polygon {
+            points: vec![[0.0, 0.0], [1.0, 0.0], [1.0, 1.0], [0.0, 1.0]],
+        };
+        assert!(r.contains([0.5, 0.5]));
+        assert!(!r.contains([1.5, 0.5]));
+    }
+}

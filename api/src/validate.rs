@@ -1,0 +1,435 @@
+//! Scene validation: every problem is reported with its JSON path and the offending value.
+//!
+//! [`parse_scene`] turns JSON text into a scene (syntax and type errors carry their path
+//! too, via `serde_path_to_error`); [`validate`] checks the physics and geometry and returns
+//! the size of the run.
+
+use std::fmt;
+
+use schemars::JsonSchema;
+use serde::{Deserialize, Serialize};
+
+use crate::lattice;
+use crate::scene::{
+    Analysis, ContactLaw, Damping, FieldKind, GrowthDirection, Propagation, Region, Scene, Vec2,
+};
+
+/// One validation problem.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct ValidationError {
+    /// JSON path of the offending field, e.g. `materials.plate.poissons_ratio`.
+    pub path: String,
+    /// The offending value as JSON text (empty when the field is missing).
+    pub value: String,
+    /// What is wrong, e.g. `is outside (-1, 0.5)`.
+    pub reason: String,
+}
+
+impl fmt::Display for ValidationError {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        if self.value.is_empty() {
+            write!(f, "{}: {}", self.path, self.reason)
+        } else {
+            write!(f, "{}: {} {}", self.path, self.value, self.reason)
+        }
+    }
+}
+
+/// All problems found in a scene.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub struct ValidationErrors(pub Vec<ValidationError>);
+
+impl fmt::Display for ValidationErrors {
+    fn fmt(&self, f: &mut fmt::Formatter<'_>) -> fmt::Result {
+        for (i, e) in self.0.iter().enumerate() {
+            if i > 0 {
+                writeln!(f)?;
+            }
+            write!(f, "{e}")?;
+        }
+        Ok(())
+    }
+}
+
+/// The size of a valid run.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct RunSize {
+    /// Number of particles.
+    pub particles: u64,
+    /// Number of nodes of the grid box.
+    pub grid_nodes: u64,
+    /// Time step Δt (s).
+    pub time_step: f64,
+    /// Number of time steps to reach `time.end`.
+    pub steps: u64,
+}
+
+/// Parse a scene from JSON text; syntax, type and unknown-field errors name their path.
+pub fn parse_scene(text: &str) -> Result<Scene, ValidationErrors> {
+    let de = &mut serde_json::Deserializer::from_str(text);
+    serde_path_to_error::deserialize(de).map_err(|e| {
+        let path = e.path().to_string();
+        let path = if path == "." { String::new() } else { path };
+        ValidationErrors(vec![ValidationError {
+            path: if path.is_empty() {
+                "(document)".into()
+            } else {
+                path
+            },
+            value: String::new(),
+            reason: e.into_inner().to_string(),
+        }])
+    })
+}
+
+/// Parse a scene from an already-parsed JSON value; errors name their path.
+pub fn scene_from_value(value: serde_json::Value) -> Result<Scene, ValidationErrors> {
+    serde_path_to_error::deserialize(value).map_err(|e| {
+        let path = e.path().to_string();
+        ValidationErrors(vec![ValidationError {
+            path: if path == "." || path.is_empty() {
+                "(document)".into()
+            } else {
+                path
+            },
+            value: String::new(),
+            reason: e.into_inner().to_string(),
+        }])
+    })
+}
+
+struct Checker {
+    errors: Vec<ValidationError>,
+}
+
+impl Checker {
+    fn err(&mut self, path: impl Into<String>, value: impl Serialize, reason: impl Into<String>) {
+        self.errors.push(ValidationError {
+            path: path.into(),
+            value: serde_json::to_string(&value).unwrap_or_default(),
+            reason: reason.into(),
+        });
+    }
+    fn finite(&mut self, path: &str, v: f64) -> bool {
+        if v.is_finite() {
+            true
+        } else {
+            self.errors.push(ValidationError {
+                path: path.into(),
+                value: format!("{v}"),
+                reason: "is not a finite number".into(),
+            });
+            false
+        }
+    }
+    fn positive(&mut self, path: &str, v: f64) {
+        if self.finite(path, v) && v <= 0.0 {
+            self.err(path, v, "must be > 0");
+        }
+    }
+    fn non_negative(&mut self, path: &str, v: f64) {
+        if self.finite(path, v) && v < 0.0 {
+            self.err(path, v, "must be ≥ 0");
+        }
+    }
+    fn point(&mut self, path: &str, p: Vec2) -> bool {
+        let a = self.finite(&format!("{path}.0"), p[0]);
+        let b = self.finite(&format!("{path}.1"), p[1]);
+        a && b
+    }
+    fn region(&mut self, path: &str, r: &Region) -> bool {
+        match r {
+            Region::Rectangle { min, max } => {
+                let ok = self.point(&format!("{path}.rectangle.min"), *min)
+                    & self.point(&format!("{path}.rectangle.max"), *max);
+                if ok && (max[0] <= min[0] || max[1] <= min[1]) {
+                    self.err(
+                        format!("{path}.rectangle.max"),
+                        max,
+                        format!("must be above and to the right of min {min:?}"),
+                    );
+                    return false;
+                }
+                ok
+            }
+            Region::Circle { center, radius } => {
+                let ok = self.point(&format!("{path}.circle.center"), *center);
+                let rp = format!("{path}.circle.radius");
+                if self.finite(&rp, *radius) && *radius <= 0.0 {
+                    self.err(rp, radius, "must be > 0");
+                    return false;
+                }
+                ok && radius.is_finite()
+            }
+            Region::Polygon { points } => {
+                if points.len() < 3 {
+                    self.err(
+                        format!("{path}.polygon.points"),
+                        points.len(),
+                        "points: a polygon needs at least 3",
+                    );
+                    return false;
+                }
+                let mut ok = true;
+                for (i, p) in points.iter().enumerate() {
+                    ok &= self.point(&format!("{path}.polygon.points.{i}"), *p);
+                }
+                ok
+            }
+        }
+    }
+}
+
+/// Validate a scene. Returns the run size, or every problem found.
+pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
+    let mut c = Checker { errors: Vec::new() };
+
+    if scene.analysis == Analysis::ThreeD {
+        c.err(
+            "analysis",
+            "3d",
+            "is reserved: this solver is 2D (use plane_strain or plane_stress)",
+        );
+    }
+    c.positive("thickness", scene.thickness);
+
+    // Grid.
+    let g = &scene.grid;
+    let h = g.cell_size;
+    c.positive("grid.cell_size", h);
+    let grid_ok = c.point("grid.min", g.min) & c.point("grid.max", g.max) && h.is_finite() && h > 0.0;
+    let mut grid_nodes = 0u64;
+    if grid_ok {
+        if g.max[0] <= g.min[0] || g.max[1] <= g.min[1] {
+            c.err("grid.max", g.max, format!("must be above and to the right of grid.min {:?}", g.min));
+        } else {
+            let nx = ((g.max[0] - g.min[0]) / h - 1e-9).ceil() as u64 + 1;
+            let ny = ((g.max[1] - g.min[1]) / h - 1e-9).ceil() as u64 + 1;
+            grid_nodes = nx.saturating_mul(ny);
+            if grid_nodes > 200_000_000 {
+                c.err(
+                    "grid.cell_size",
+                    h,
+                    format!("gives {grid_nodes} grid nodes; at most 200000000 are supported"),
+                );
+            }
+        }
+    }
+
+    // Materials.
+    if scene.materials.is_empty() {
+        c.err("materials", serde_json::json!({}), "must define at least one material");
+    }
+    for (name, m) in &scene.materials {
+        let p = format!("materials.{name}");
+        c.positive(&format!("{p}.density"), m.density());
+        c.positive(&format!("{p}.youngs_modulus"), m.youngs_modulus());
+        let nu = m.poissons_ratio();
+        let np = format!("{p}.poissons_ratio");
+        if c.finite(&np, nu) && !(nu > -1.0 && nu < 0.5) {
+            c.err(np, nu, "is outside (-1, 0.5)");
+        }
+    }
+
+    // Time.
+    c.positive("time.end", scene.time.end);
+    let cfl = scene.time.cfl;
+    if c.finite("time.cfl", cfl) && !(cfl > 0.0 && cfl <= 1.0) {
+        c.err("time.cfl", cfl, "is outside (0, 1]");
+    }
+
+    // Bodies: region inside the grid (with the empty cell layer GIMP needs), known material.
+    if scene.bodies.is_empty() {
+        c.err("bodies", serde_json::json!([]), "must contain at least one body");
+    }
+    let mut regions_ok = true;
+    for (i, b) in scene.bodies.iter().enumerate() {
+        let p = format!("bodies.{i}");
+        if !scene.materials.contains_key(&b.material) {
+            let known: Vec<&String> = scene.materials.keys().collect();
+            c.err(
+                format!("{p}.material"),
+                &b.material,
+                format!("is not a defined material (known: {known:?})"),
+            );
+        }
+        if b.particles_per_cell == 0 || b.particles_per_cell > 8 {
+            c.err(format!("{p}.particles_per_cell"), b.particles_per_cell, "is outside 1..=8");
+            regions_ok = false;
+        }
+        c.point(&format!("{p}.initial_velocity"), b.initial_velocity);
+        let rok = c.region(&format!("{p}.region"), &b.region);
+        regions_ok &= rok;
+        if rok && grid_ok {
+            let (lo, hi) = b.region.bounds();
+            let inner_lo = [g.min[0] + h, g.min[1] + h];
+            let inner_hi = [g.max[0] - h, g.max[1] - h];
+            if lo[0] < g.min[0] || lo[1] < g.min[1] || hi[0] > g.max[0] || hi[1] > g.max[1] {
+                c.err(
+                    format!("{p}.region"),
+                    [lo, hi],
+                    format!("reaches outside the grid box [{:?}, {:?}]", g.min, g.max),
+                );
+                regions_ok = false;
+            } else if lo[0] < inner_lo[0] - 1e-12 * h
+                || lo[1] < inner_lo[1] - 1e-12 * h
+                || hi[0] > inner_hi[0] + 1e-12 * h
+                || hi[1] > inner_hi[1] + 1e-12 * h
+            {
+                c.err(
+                    format!("{p}.region"),
+                    [lo, hi],
+                    format!(
+                        "comes closer than one cell to the grid edge: GIMP needs one empty \
+                         cell layer, keep bodies within [{inner_lo:?}, {inner_hi:?}]"
+                    ),
+                );
+                regions_ok = false;
+            }
+        }
+    }
+
+    // Count particles (also detects empty bodies).
+    let mut particles = 0u64;
+    if regions_ok && grid_ok && c.errors.is_empty() {
+        let counts = lattice::count_per_body(scene);
+        for (i, n) in counts.iter().enumerate() {
+            if *n == 0 {
+                c.err(
+                    format!("bodies.{i}.region"),
+                    scene.bodies[i].region.bounds(),
+                    "contains no particle centre (empty body, or entirely covered by earlier bodies)",
+                );
+            }
+            particles += *n as u64;
+        }
+    }
+
+    // Cracks.
+    for (i, cr) in scene.cracks.iter().enumerate() {
+        let p = format!("cracks.{i}");
+        if cr.points.len() < 2 {
+            c.err(format!("{p}.points"), &cr.points, "needs at least two points");
+        }
+        let mut pts_ok = true;
+        for (k, q) in cr.points.iter().enumerate() {
+            pts_ok &= c.point(&format!("{p}.points.{k}"), *q);
+            if grid_ok && pts_ok && (q[0] < g.min[0] || q[0] > g.max[0] || q[1] < g.min[1] || q[1] > g.max[1]) {
+                c.err(format!("{p}.points.{k}"), q, "lies outside the grid box");
+            }
+        }
+        if pts_ok {
+            for k in 1..cr.points.len() {
+                let (a, b) = (cr.points[k - 1], cr.points[k]);
+                if (a[0] - b[0]).hypot(a[1] - b[1]) <= 1e-12 * h.abs().max(1e-300) {
+                    c.err(format!("{p}.points.{k}"), b, "repeats the previous point (zero-length segment)");
+                }
+            }
+        }
+        if cr.j_contour == 0 || cr.j_contour > 16 {
+            c.err(format!("{p}.j_contour"), cr.j_contour, "is outside 1..=16 cells");
+        }
+        if let ContactLaw::Coulomb { friction } = cr.contact {
+            c.non_negative(&format!("{p}.contact.friction"), friction);
+        }
+        if let Propagation::EnergyRelease { toughness, direction, .. } = &cr.propagation {
+            c.positive(&format!("{p}.propagation.toughness"), *toughness);
+            if let GrowthDirection::Fixed(d) = direction {
+                let dp = format!("{p}.propagation.direction.fixed");
+                if c.point(&dp, *d) && d[0] == 0.0 && d[1] == 0.0 {
+                    c.err(dp, d, "must be a non-zero vector");
+                }
+            }
+        }
+    }
+
+    // Boundary conditions.
+    for (i, bc) in scene.boundary_conditions.iter().enumerate() {
+        let p = format!("boundary_conditions.{i}");
+        c.region(&format!("{p}.region"), &bc.region);
+        if bc.velocity.x.is_none() && bc.velocity.y.is_none() {
+            c.err(format!("{p}.velocity"), serde_json::json!({}), "prescribes no component (give x, y or both)");
+        }
+        if let Some(v) = bc.velocity.x {
+            c.finite(&format!("{p}.velocity.x"), v);
+        }
+        if let Some(v) = bc.velocity.y {
+            c.finite(&format!("{p}.velocity.y"), v);
+        }
+        if let Some(t) = bc.ramp_time {
+            c.non_negative(&format!("{p}.ramp_time"), t);
+        }
+        if let Some(t) = bc.start {
+            c.non_negative(&format!("{p}.start"), t);
+        }
+        if let Some(t) = bc.end {
+            c.non_negative(&format!("{p}.end"), t);
+            if let Some(s) = bc.start
+                && t <= s
+            {
+                c.err(format!("{p}.end"), t, format!("must be after start ({s})"));
+            }
+        }
+    }
+
+    // Loads.
+    for (i, l) in scene.loads.iter().enumerate() {
+        let p = format!("loads.{i}");
+        c.region(&format!("{p}.region"), &l.region);
+        c.point(&format!("{p}.traction"), l.traction);
+        if let Some(t) = l.ramp_time {
+            c.non_negative(&format!("{p}.ramp_time"), t);
+        }
+    }
+
+    // Damping.
+    match scene.damping {
+        Damping::None => {}
+        Damping::Kinetic { coefficient } => {
+            if c.finite("damping.coefficient", coefficient) && !(0.0..1.0).contains(&coefficient) {
+                c.err("damping.coefficient", coefficient, "is outside [0, 1)");
+            }
+        }
+        Damping::Viscous { coefficient } => c.non_negative("damping.coefficient", coefficient),
+    }
+
+    // Output.
+    let o = &scene.output;
+    if let Some(hi) = o.history_interval {
+        c.positive("output.history_interval", hi);
+    }
+    c.non_negative("output.snapshot_interval", o.snapshot_interval);
+    c.positive("output.speed_window", o.speed_window);
+    if o.fields.contains(&FieldKind::Fringe) {
+        match o.fringe_constant {
+            None => c.err(
+                "output.fringe_constant",
+                serde_json::Value::Null,
+                "is required when output.fields contains \"fringe\" (f_σ in N/m)",
+            ),
+            Some(f) => c.positive("output.fringe_constant", f),
+        }
+    }
+
+    let time_step = scene.time_step().unwrap_or(f64::NAN);
+    let mut steps = 0;
+    if c.errors.is_empty() {
+        let s = (scene.time.end / time_step * (1.0 - 1e-12)).ceil();
+        if !(s.is_finite() && s < 1e12) {
+            c.err("time.end", scene.time.end, format!("needs {s} steps of {time_step:e} s"));
+        } else {
+            steps = s as u64;
+        }
+    }
+
+    if c.errors.is_empty() {
+        Ok(RunSize {
+            particles,
+            grid_nodes,
+            time_step,
+            steps,
+        })
+    } else {
+        Err(ValidationErrors(c.errors))
+    }
+}

@@ -1,0 +1,60 @@
+//! `fracture`: the single binary of mpm-fracture (`api.md`, command line).
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+
+use clap::{Parser, Subcommand};
+
+mod local;
+
+/// Dynamic fracture with the material point method: service and command-line tools.
+#[derive(Parser, Debug)]
+#[command(name = "fracture", version, about)]
+struct Cli {
+    #[command(subcommand)]
+    command: Option<Command>,
+}
+
+#[derive(Subcommand, Debug)]
+enum Command {
+    /// Run the service: HTTP API, job queue, local workers, dashboard.
+    Serve(fracture_server::cli::ServeArgs),
+    /// Run one worker process that claims jobs from a server.
+    Worker(fracture_server::cli::WorkerArgs),
+    /// Submit a scene to a server (optionally wait for the outcome).
+    Submit(fracture_server::cli::SubmitArgs),
+    /// Run one scene locally, without a server, writing the run directory.
+    Run {
+        /// Scene JSON file.
+        scene: PathBuf,
+        /// Output directory.
+        #[arg(long)]
+        out: PathBuf,
+        /// Solver threads (0 = one per core).
+        #[arg(long, default_value_t = 0)]
+        threads: usize,
+    },
+    /// Validate a scene and print the size of the run.
+    Validate {
+        /// Scene JSON file.
+        scene: PathBuf,
+    },
+    /// Print the scene JSON Schema.
+    Schema,
+    /// Benchmarks: throughput (particle-steps per second) and more.
+    Bench(local::BenchArgs),
+}
+
+fn main() -> ExitCode {
+    let cli = Cli::parse();
+    match cli.command {
+        None => fracture_server::cli::serve(fracture_server::cli::ServeArgs::from_env()),
+        Some(Command::Serve(a)) => fracture_server::cli::serve(a),
+        Some(Command::Worker(a)) => fracture_server::cli::worker(a),
+        Some(Command::Submit(a)) => fracture_server::cli::submit(a),
+        Some(Command::Run { scene, out, threads }) => local::run(&scene, &out, threads),
+        Some(Command::Validate { scene }) => local::validate(&scene),
+        Some(Command::Schema) => local::schema(),
+        Some(Command::Bench(a)) => local::bench(a),
+    }
+}

@@ -1,0 +1,16 @@
+//! The physics of mpm-fracture: a 2D GIMP material point method with explicit cracks.
+//!
+//! A [`Simulation`] is built from a validated [`Scene`](fracture_api::Scene), advanced by
+//! [`Simulation::step`], and observed through read-only views ([`Simulation::energy`],
+//! [`Simulation::crack_tips`], [`Simulation::snapshot`], [`Simulation::particles`]).
+//! The method is written out in `../shared/design/algorithm.md`; modules follow its
+//! sections: [`shape`] (§1), [`grid`] and [`particles`] (data), [`step`] (§2), [`material`],
+//! [`crack`] (§3–§7).
+//!
+//! The solver does no IO and never logs. Parallel loops use rayon with a deterministic
+//! strip-coloured scatter, so results are bitwise identical for any thread count.
+
+pub mod shape;
+pub mod sim;
+
+pub use sim::{BuildError, Simulation, SolverConfig, StepError, StepStats};

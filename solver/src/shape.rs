@@ -1,0 +1,193 @@
+//! Shape functions (`algorithm.md` §1).
+//!
+//! Uniform GIMP (Bardenhagen & Kober 2004) with the particle half-width l = h/(2·ppc) fixed at
+//! its undeformed size, and classic bilinear MPM. Both are evaluated in cell units
+//! (ξ = (x − x_min)/h) as three 1D weights per direction, so a particle touches at most 3×3
+//! nodes; the 2D shape function is the tensor product S = S_x S_y.
+
+use fracture_api::scene::ShapeFunction;
+
+/// 1D weights of one particle: nodes `base`, `base+1`, `base+2`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Weights1 {
+    /// Index of the first node.
+    pub base: i32,
+    /// Shape function values.
+    pub s: [f64; 3],
+    /// Derivatives dS/dξ (divide by h for dS/dx).
+    pub ds: [f64; 3],
+}
+
+/// Uniform GIMP weight and its derivative for the signed distance `d` (cell units) between
+/// particle and node, with particle half-width `l` (cell units, 0 < l ≤ ½).
+#[inline(always)]
+pub fn gimp(d: f64, l: f64) -> (f64, f64) {
+    let a = d.abs();
+    let sign = if d < 0.0 { -1.0 } else { 1.0 };
+    if a < l {
+        (1.0 - (a * a + l * l) / (2.0 * l), -d / l)
+    } else if a <= 1.0 - l {
+        (1.0 - a, -sign)
+    } else if a < 1.0 + l {
+        let r = 1.0 + l - a;
+        (r * r / (4.0 * l), -sign * r / (2.0 * l))
+    } else {
+        (0.0, 0.0)
+    }
+}
+
+/// Bilinear (tent) weight and derivative for the signed distance `d` (cell units).
+#[inline(always)]
+pub fn linear(d: f64) -> (f64, f64) {
+    let a = d.abs();
+    if a < 1.0 {
+        (1.0 - a, if d < 0.0 { 1.0 } else { -1.0 })
+    } else {
+        (0.0, 0.0)
+    }
+}
+
+/// 1D weights at ξ (cell units from the grid origin).
+#[inline(always)]
+pub fn weights_1d(kind: ShapeFunction, xi: f64, l: f64) -> Weights1 {
+    let cell = xi.floor();
+    let f = xi - cell;
+    match kind {
+        ShapeFunction::Gimp => {
+            // A particle in the left half of its cell reaches nodes cell−1 … cell+1, in the
+            // right half cell … cell+2 (l ≤ ½ means it never reaches both).
+            let base = if f < 0.5 { cell - 1.0 } else { cell };
+            let mut w = Weights1 {
+                base: base as i32,
+                ..Default::default()
+            };
+            for k in 0..3 {
+                let (s, ds) = gimp(xi - (base + k as f64), l);
+                w.s[k] = s;
+                w.ds[k] = ds;
+            }
+            w
+        }
+        ShapeFunction::Linear => Weights1 {
+            base: cell as i32,
+            s: [1.0 - f, f, 0.0],
+            ds: [-1.0, 1.0, 0.0],
+        },
+    }
+}
+
+/// 2D weights of one particle: 3×3 nodes starting at `(bx, by)`.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Weights2 {
+    /// x weights.
+    pub x: Weights1,
+    /// y weights.
+    pub y: Weights1,
+}
+
+impl Weights2 {
+    /// Weights at position ξ = (x − x_min)/h in cell units.
+    #[inline(always)]
+    pub fn new(kind: ShapeFunction, xi: [f64; 2], l: f64) -> Self {
+        Weights2 {
+            x: weights_1d(kind, xi[0], l),
+            y: weights_1d(kind, xi[1], l),
+        }
+    }
+    /// S for node (a, b) of the 3×3 stencil.
+    #[inline(always)]
+    pub fn s(&self, a: usize, b: usize) -> f64 {
+        self.x.s[a] * self.y.s[b]
+    }
+    /// ∇S in cell units (multiply by 1/h) for node (a, b).
+    #[inline(always)]
+    pub fn g(&self, a: usize, b: usize) -> [f64; 2] {
+        [self.x.ds[a] * self.y.s[b], self.x.s[a] * self.y.ds[b]]
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+    use proptest::prelude::*;
+
+    fn sums(kind: ShapeFunction, xi: [f64; 2], l: f64) -> (f64, [f64; 2]) {
+        let w = Weights2::new(kind, xi, l);
+        let mut s = 0.0;
+        let mut g = [0.0; 2];
+        for a in 0..3 {
+            for b in 0..3 {
+                s += w.s(a, b);
+                let gg = w.g(a, b);
+                g[0] += gg[0];
+                g[1] += gg[1];
+            }
+        }
+        (s, g)
+    }
+
+    proptest! {
+        // algorithm.md §1: Σ S = 1 and Σ ∇S = 0 at every point inside the grid, for every
+        // particle size of 1..4 particles per cell.
+        #[test]
+        fn partition_of_unity_gimp(x in 2.0f64..50.0, y in 2.0f64..50.0, ppc in 1u32..5) {
+            let l = 0.5 / ppc as f64;
+            let (s, g) = sums(ShapeFunction::Gimp, [x, y], l);
+            prop_assert!((s - 1.0).abs() < 1e-12, "sum S = {s}");
+            prop_assert!(g[0].abs() < 1e-12 && g[1].abs() < 1e-12, "sum G = {g:?}");
+        }
+
+        #[test]
+        fn partition_of_unity_linear(x in 2.0f64..50.0, y in 2.0f64..50.0) {
+            let (s, g) = sums(ShapeFunction::Linear, [x, y], 0.25);
+            prop_assert!((s - 1.0).abs() < 1e-12);
+            prop_assert!(g[0].abs() < 1e-12 && g[1].abs() < 1e-12);
+        }
+
+        // The derivative is the derivative: central differences agree to O(ε²).
+        #[test]
+        fn gimp_derivative_matches_difference(d in -1.6f64..1.6, ppc in 1u32..5) {
+            let l = 0.5 / ppc as f64;
+            let eps = 1e-6;
+            // Skip the kink points of S' (|d| = l, 1−l, 1+l) where the difference straddles.
+            let a = d.abs();
+            prop_assume!([l, 1.0 - l, 1.0 + l].iter().all(|k| (a - k).abs() > 1e-4));
+            let num = (gimp(d + eps, l).0 - gimp(d - eps, l).0) / (2.0 * eps);
+            prop_assert!((num - gimp(d, l).1).abs() < 1e-6, "d={d} l={l}: {num} vs {}", gimp(d, l).1);
+        }
+    }
+
+    #[test]
+    fn gimp_is_continuous_across_piecewise_boundaries() {
+        // S and dS/dd are continuous at |d| = l, 1 − l and 1 + l (GIMP is C¹ in S).
+        for ppc in 1..=4 {
+            let l = 0.5 / ppc as f64;
+            for k in [l, 1.0 - l, 1.0 + l] {
+                for sign in [-1.0, 1.0] {
+                    let at = sign * k;
+                    let lo = gimp(at - 1e-12, l);
+                    let hi = gimp(at + 1e-12, l);
+                    assert!((lo.0 - hi.0).abs() < 1e-9, "S jumps at {at} (l={l})");
+                    assert!((lo.1 - hi.1).abs() < 1e-9, "S' jumps at {at} (l={l})");
+                }
+            }
+        }
+    }
+
+    #[test]
+    fn weights_continuous_when_particle_crosses_cell_half() {
+        // Moving the particle across the stencil switch (f = ½) must not change any node's
+        // weight: the node set changes only where the dropped node's weight is zero.
+        let l = 0.25;
+        let a = weights_1d(ShapeFunction::Gimp, 10.5 - 1e-12, l);
+        let b = weights_1d(ShapeFunction::Gimp, 10.5 + 1e-12, l);
+        let node_w = |w: &Weights1, node: i32| {
+            (0..3)
+                .find(|&k| w.base + k as i32 == node)
+                .map_or(0.0, |k| w.s[k])
+        };
+        for node in 8..14 {
+            assert!((node_w(&a, node) - node_w(&b, node)).abs() < 1e-9, "node {node}");
+        }
+    }
+}
