@@ -403,3 +403,318 @@ pub(crate) fn run_model<M: Model>(
     }
     summary
 }
+
+#[cfg(test)]
+#[allow(clippy::unwrap_used)]
+mod tests {
+    use std::time::Duration;
+
+    use fracture_api::results::{FieldComponent, Summary};
+
+    use super::*;
+
+    /// A scripted model: `n` steps of `dt`, one crack tip, optional failure or panic.
+    struct Fake {
+        n: u64,
+        dt: f64,
+        taken: u64,
+        fail_at: Option<u64>,
+        panic_at: Option<u64>,
+    }
+
+    impl Fake {
+        fn new(n: u64, dt: f64) -> Self {
+            Fake {
+                n,
+                dt,
+                taken: 0,
+                fail_at: None,
+                panic_at: None,
+            }
+        }
+    }
+
+    impl Model for Fake {
+        fn step(&mut self) -> Result<StepStats, String> {
+            let next = self.taken + 1;
+            if self.panic_at == Some(next) {
+                panic!("index out of bounds in step {next}");
+            }
+            self.taken = next;
+            if self.fail_at == Some(next) {
+                return Err(format!("step {next}: velocity of particle 7 is not finite"));
+            }
+            Ok(StepStats {
+                grew: false,
+                active_nodes: 10 + (next % 2) as usize,
+            })
+        }
+        fn time(&self) -> f64 {
+            self.taken as f64 * self.dt
+        }
+        fn time_step(&self) -> f64 {
+            self.dt
+        }
+        fn end_time(&self) -> f64 {
+            self.n as f64 * self.dt
+        }
+        fn steps_taken(&self) -> u64 {
+            self.taken
+        }
+        fn is_finished(&self) -> bool {
+            self.taken >= self.n
+        }
+        fn particle_count(&self) -> usize {
+            100
+        }
+        fn grid_node_count(&self) -> usize {
+            36
+        }
+        fn threads(&self) -> usize {
+            3
+        }
+        fn energy(&self) -> EnergyRow {
+            EnergyRow {
+                time: self.time(),
+                kinetic: self.taken as f64,
+                ..Default::default()
+            }
+        }
+        fn crack_tips(&mut self) -> Vec<CrackTipRow> {
+            vec![CrackTipRow {
+                time: self.time(),
+                ..Default::default()
+            }]
+        }
+        fn snapshot(&self, index: u32, fields: &[FieldKind]) -> Snapshot {
+            Snapshot {
+                index,
+                time: self.time(),
+                nx: 6,
+                ny: 6,
+                origin: [0.0; 2],
+                cell_size: 1.0,
+                fields: fields.iter().map(|f| f.name().to_string()).collect(),
+                components: vec![FieldComponent {
+                    name: "sxx".into(),
+                    values: vec![0.0; 36],
+                }],
+                cracks: Vec::new(),
+            }
+        }
+    }
+
+    #[derive(Default)]
+    struct Record {
+        energy: Vec<EnergyRow>,
+        tips: Vec<CrackTipRow>,
+        snapshots: Vec<(u32, f64)>,
+        progress: Vec<Progress>,
+        finished: Vec<Summary>,
+        /// Answer Cancel from this progress call on (0-based).
+        cancel_at: Option<usize>,
+        /// Fail the n-th energy batch (0-based).
+        fail_energy_at: Option<usize>,
+        energy_batches: usize,
+        /// Order of calls, to check flush-before-progress.
+        log: Vec<&'static str>,
+    }
+
+    impl RunSink for Record {
+        fn progress(&mut self, p: &Progress) -> Result<Control, SinkError> {
+            self.log.push("progress");
+            self.progress.push(*p);
+            Ok(match self.cancel_at {
+                Some(k) if self.progress.len() > k => Control::Cancel,
+                _ => Control::Continue,
+            })
+        }
+        fn energy(&mut self, rows: &[EnergyRow]) -> Result<(), SinkError> {
+            self.log.push("energy");
+            let k = self.energy_batches;
+            self.energy_batches += 1;
+            if self.fail_energy_at == Some(k) {
+                return Err(SinkError("disk full".into()));
+            }
+            self.energy.extend_from_slice(rows);
+            Ok(())
+        }
+        fn crack_tips(&mut self, rows: &[CrackTipRow]) -> Result<(), SinkError> {
+            self.log.push("crack_tips");
+            self.tips.extend_from_slice(rows);
+            Ok(())
+        }
+        fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError> {
+            self.log.push("snapshot");
+            self.snapshots.push((snap.index, snap.time));
+            Ok(())
+        }
+        fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
+            self.log.push("finish");
+            self.finished.push(summary.clone());
+            Ok(())
+        }
+    }
+
+    fn scene(history: Option<f64>, snapshots: f64) -> Scene {
+        let history = history.map_or(String::new(), |h| format!("\"history_interval\": {h},"));
+        fracture_api::validate::parse_scene(&format!(
+            r#"{{"grid": {{"cell_size": 1.0, "min": [0,0], "max": [5,5]}},
+                "materials": {{"m": {{"model": "linear_elastic", "density": 1.0,
+                                     "youngs_modulus": 1.0, "poissons_ratio": 0.3}}}},
+                "bodies": [{{"material": "m", "region": {{"rectangle": {{"min": [1,1], "max": [4,4]}}}}}}],
+                "time": {{"end": 1.0}},
+                "output": {{ {history} "snapshot_interval": {snapshots} }} }}"#
+        ))
+        .unwrap()
+    }
+
+    fn opts(ms: u64) -> RunOptions {
+        RunOptions {
+            threads: 1,
+            flush_every: Duration::from_millis(ms),
+        }
+    }
+
+    #[test]
+    fn samples_on_the_simulated_time_cadence() {
+        // dt = 0.1, history every 0.25 → samples at steps 0, 3 (0.3), 5 (0.5), 8 (0.8),
+        // 10 (1.0); snapshots every 0.5 → steps 0, 5, 10.
+        let mut m = Fake::new(10, 0.1);
+        let mut sink = Record::default();
+        let s = run_model(&mut m, &scene(Some(0.25), 0.5), &opts(0), &mut sink);
+        assert_eq!(s.status, RunStatus::Completed, "{s:?}");
+        assert_eq!(s.message, None);
+        let times: Vec<u64> = sink.energy.iter().map(|e| e.kinetic as u64).collect();
+        assert_eq!(times, vec![0, 3, 5, 8, 10]);
+        assert_eq!(sink.tips.len(), 5);
+        let snaps: Vec<u32> = sink.snapshots.iter().map(|s| s.0).collect();
+        assert_eq!(snaps, vec![0, 1, 2]);
+        assert!((sink.snapshots[1].1 - 0.5).abs() < 1e-12);
+        assert!((sink.snapshots[2].1 - 1.0).abs() < 1e-12);
+        assert_eq!(s.steps, 10);
+        assert_eq!((s.particles, s.grid_nodes, s.threads), (100, 36, 3));
+        assert!((s.active_nodes_mean - 10.5).abs() < 1e-12);
+        assert!((s.sim_time - 1.0).abs() < 1e-12);
+        assert_eq!(s.solver_version, fracture_api::SOLVER_VERSION);
+        assert_eq!(s.scene_hash, scene(Some(0.25), 0.5).hash());
+        assert_eq!(sink.finished, vec![s.clone()]);
+        let last = sink.progress.last().unwrap();
+        assert_eq!((last.step, last.fraction), (10, 1.0));
+        assert_eq!(sink.log.last(), Some(&"finish"));
+    }
+
+    #[test]
+    fn every_step_without_history_interval_and_no_snapshots_at_zero() {
+        let mut m = Fake::new(7, 0.1);
+        let mut sink = Record::default();
+        let s = run_model(&mut m, &scene(None, 0.0), &opts(3_600_000), &mut sink);
+        assert_eq!(s.status, RunStatus::Completed);
+        assert_eq!(sink.energy.len(), 8, "t = 0 and each of 7 steps");
+        assert!(sink.snapshots.is_empty());
+        // Long flush interval: rows come in one batch before the single final progress.
+        assert_eq!(sink.progress.len(), 1);
+        assert_eq!(sink.log, vec!["energy", "crack_tips", "progress", "finish"]);
+    }
+
+    #[test]
+    fn rows_are_flushed_before_each_progress_report() {
+        let mut m = Fake::new(20, 0.1);
+        let mut sink = Record::default();
+        run_model(&mut m, &scene(None, 0.0), &opts(0), &mut sink);
+        assert_eq!(
+            sink.progress.len(),
+            21,
+            "every step (flush_every = 0) and the end"
+        );
+        // The final report has nothing new to flush.
+        let n = sink.log.len() - 2;
+        assert_eq!(&sink.log[n - 1..], ["progress", "progress", "finish"]);
+        for (i, w) in sink.log[..n - 1].windows(2).enumerate() {
+            if w[1] == "progress" && i > 0 {
+                assert_eq!(w[0], "crack_tips", "at {i}: {:?}", sink.log);
+            }
+        }
+        // Each progress report follows the rows of its own step.
+        assert_eq!(sink.energy.len(), 21);
+    }
+
+    #[test]
+    fn cancel_stops_the_run() {
+        let mut m = Fake::new(1000, 0.1);
+        let mut sink = Record {
+            cancel_at: Some(2),
+            ..Default::default()
+        };
+        let s = run_model(&mut m, &scene(None, 0.0), &opts(0), &mut sink);
+        assert_eq!(s.status, RunStatus::Cancelled);
+        assert_eq!(s.steps, 3);
+        assert!(s.message.is_some());
+        assert_eq!(sink.finished.len(), 1);
+        assert_eq!(sink.finished[0].status, RunStatus::Cancelled);
+        // Rows up to the cancellation are all delivered.
+        assert_eq!(sink.energy.last().unwrap().kinetic, 3.0);
+    }
+
+    #[test]
+    fn step_error_fails_with_its_message_and_a_final_sample() {
+        let mut m = Fake::new(100, 0.1);
+        m.fail_at = Some(6);
+        let mut sink = Record::default();
+        let s = run_model(&mut m, &scene(Some(0.25), 0.0), &opts(3_600_000), &mut sink);
+        assert_eq!(s.status, RunStatus::Failed);
+        assert_eq!(
+            s.message.as_deref(),
+            Some("step 6: velocity of particle 7 is not finite")
+        );
+        assert_eq!(s.steps, 6);
+        let ks: Vec<u64> = sink.energy.iter().map(|e| e.kinetic as u64).collect();
+        assert_eq!(
+            ks,
+            vec![0, 3, 5, 6],
+            "samples so far plus the failing state"
+        );
+        assert_eq!(sink.finished.len(), 1);
+    }
+
+    #[test]
+    fn solver_panic_becomes_a_failed_summary() {
+        let mut m = Fake::new(100, 0.1);
+        m.panic_at = Some(4);
+        let mut sink = Record::default();
+        let s = run_model(&mut m, &scene(None, 0.0), &opts(3_600_000), &mut sink);
+        assert_eq!(s.status, RunStatus::Failed);
+        let msg = s.message.unwrap();
+        assert!(msg.contains("panicked in step 4"), "{msg}");
+        assert!(msg.contains("index out of bounds in step 4"), "{msg}");
+        assert_eq!(sink.energy.len(), 4, "t = 0 and steps 1..=3 kept");
+        assert_eq!(sink.finished.len(), 1);
+    }
+
+    #[test]
+    fn sink_error_fails_the_run() {
+        let mut m = Fake::new(100, 0.1);
+        let mut sink = Record {
+            fail_energy_at: Some(1),
+            ..Default::default()
+        };
+        let s = run_model(&mut m, &scene(None, 0.0), &opts(0), &mut sink);
+        assert_eq!(s.status, RunStatus::Failed);
+        assert_eq!(
+            s.message.as_deref(),
+            Some("could not record results: disk full")
+        );
+        assert!(s.steps < 100);
+        assert_eq!(sink.finished.len(), 1);
+        assert_eq!(sink.finished[0].status, RunStatus::Failed);
+    }
+
+    #[test]
+    fn panic_messages_are_extracted() {
+        let p = std::panic::catch_unwind(|| panic!("plain")).unwrap_err();
+        assert_eq!(panic_message(&*p), "plain");
+        let n = 3;
+        let p = std::panic::catch_unwind(|| panic!("formatted {n}")).unwrap_err();
+        assert_eq!(panic_message(&*p), "formatted 3");
+    }
+}
