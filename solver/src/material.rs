@@ -56,10 +56,9 @@ impl Elastic {
     }
 
     /// Update stress `s` = (xx, yy, xy, zz) for the velocity gradient `l` = [[Lxx, Lxy],
-    /// [Lyx, Lyy]] over `dt`; returns the strain increment (εxx, εyy, γxy) and the strain
-    /// energy density increment.
+    /// [Lyx, Lyy]] over `dt`; returns the strain energy density increment.
     #[inline(always)]
-    pub fn update(&self, s: &mut [f64; 4], l: [[f64; 2]; 2], dt: f64) -> ([f64; 3], f64) {
+    pub fn update(&self, s: &mut [f64; 4], l: [[f64; 2]; 2], dt: f64) -> f64 {
         let exx = l[0][0] * dt;
         let eyy = l[1][1] * dt;
         let gxy = (l[0][1] + l[1][0]) * dt;
@@ -69,6 +68,6 @@ impl Elastic {
         s[2] += self.c66 * gxy;
         s[3] += self.cz * (exx + eyy);
         let dw = 0.5 * ((old[0] + s[0]) * exx + (old[1] + s[1]) * eyy + (old[2] + s[2]) * gxy);
-        ([exx, eyy, gxy], dw)
+        dw
     }
 }

@@ -33,8 +33,8 @@ pub struct Mech {
 pub struct Cold {
     /// Initial position (m), for displacements.
     pub x0: [f64; 2],
-    /// Accumulated small strain (εxx, εyy, γxy).
-    pub strain: [f64; 3],
+    /// Displacement gradient (∂ux/∂x, ∂ux/∂y, ∂uy/∂x, ∂uy/∂y), accumulated as Σ L·Δt.
+    pub grad_u: [f64; 4],
     /// Index of the particle in creation order (stable across re-sorting).
     pub id: u32,
     /// Body index.

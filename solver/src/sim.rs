@@ -243,7 +243,7 @@ pub struct Simulation {
     scratch_stress: Vec<[f64; 4]>,
     scratch_cold: Vec<Cold>,
     col_sums: Vec<f64>,
-    pub(crate) cracks: Option<Box<Cracks>>,
+    cracks: Option<Box<Cracks>>,
 }
 
 impl Simulation {
@@ -305,7 +305,7 @@ impl Simulation {
             parts.stress.push([0.0; 4]);
             parts.cold.push(Cold {
                 x0: s.x,
-                strain: [0.0; 3],
+                grad_u: [0.0; 4],
                 id,
                 body: s.body,
             });
@@ -776,10 +776,25 @@ impl Simulation {
     }
 
     fn propagate(&mut self) -> Result<bool, StepError> {
-        let Some(cr) = self.cracks.as_mut() else {
+        let Some(mut cr) = self.cracks.take() else {
             return Ok(false);
         };
-        Ok(cr.propagate(&self.geom, self.shape, &self.parts, &self.nodes, &self.mats, self.time, self.dt))
+        let grew = cr.propagate(&self.view(), self.time);
+        self.cracks = Some(cr);
+        Ok(grew)
+    }
+
+    fn view(&self) -> crate::crack::View<'_> {
+        crate::crack::View {
+            geom: &self.geom,
+            shape: self.shape,
+            parts: &self.parts,
+            mats: &self.mats,
+            nodes: &self.nodes,
+            f1: &self.f1,
+            slot_of: &self.slot_of,
+            strip_bounds: &self.strip_bounds,
+        }
     }
 }
 
@@ -938,12 +953,13 @@ impl Simulation {
                     r[1] *= inv_h;
                 }
                 let mat = &mats[mech.mat as usize];
-                let (de, dw) = mat.update(&mut p.stress[i], l, half);
+                let dw = mat.update(&mut p.stress[i], l, half);
                 p.mech[i].w += dw;
-                let c = &mut p.cold[i].strain;
-                c[0] += de[0];
-                c[1] += de[1];
-                c[2] += de[2];
+                let gu = &mut p.cold[i].grad_u;
+                gu[0] += l[0][0] * half;
+                gu[1] += l[0][1] * half;
+                gu[2] += l[1][0] * half;
+                gu[3] += l[1][1] * half;
                 let s = p.stress[i];
                 if !(s[0].is_finite() && s[1].is_finite() && s[2].is_finite()) {
                     first_fail(&mut acc, first + i, FAIL_STRESS);
@@ -1113,13 +1129,14 @@ impl Simulation {
                     r[0] *= inv_h;
                     r[1] *= inv_h;
                 }
-                let (de, dw) = mats[mech.mat as usize].update(&mut p.stress[i], l, half);
+                let dw = mats[mech.mat as usize].update(&mut p.stress[i], l, half);
                 let wnew = mech.w + dw;
                 p.mech[i].w = wnew;
-                let c = &mut p.cold[i].strain;
-                c[0] += de[0];
-                c[1] += de[1];
-                c[2] += de[2];
+                let gu = &mut p.cold[i].grad_u;
+                gu[0] += l[0][0] * half;
+                gu[1] += l[0][1] * half;
+                gu[2] += l[1][0] * half;
+                gu[3] += l[1][1] * half;
                 let s = p.stress[i];
                 if !(s[0].is_finite() && s[1].is_finite() && s[2].is_finite()) {
                     first_fail(&mut acc, first + i, FAIL_STRESS);
@@ -1206,10 +1223,17 @@ impl Simulation {
 
     /// One row per crack tip now (J and K computed here, on demand).
     pub fn crack_tips(&mut self) -> Vec<CrackTipRow> {
-        let Some(cr) = self.cracks.as_mut() else {
+        let Some(mut cr) = self.cracks.take() else {
             return Vec::new();
         };
-        cr.tip_rows(&self.geom, self.shape, &self.parts, &self.mats, self.time, self.dt)
+        let rows = cr.tip_rows(&self.view(), self.time);
+        self.cracks = Some(cr);
+        rows
+    }
+
+    /// The cracks, if the scene has any.
+    pub fn cracks(&self) -> Option<&Cracks> {
+        self.cracks.as_deref()
     }
 
     /// Fields sampled at the grid nodes now: mass-weighted averages of particle values
@@ -1235,15 +1259,15 @@ impl Simulation {
         for i in 0..p.len() {
             let k = p.kin[i];
             let s = p.stress[i];
-            let e = p.cold[i].strain;
+            let gu = p.cold[i].grad_u;
             for (c, name) in names.iter().enumerate() {
                 vals[c] = match *name {
                     "sxx" => s[0],
                     "syy" => s[1],
                     "sxy" => s[2],
-                    "exx" => e[0],
-                    "eyy" => e[1],
-                    "exy" => 0.5 * e[2],
+                    "exx" => gu[0],
+                    "eyy" => gu[3],
+                    "exy" => 0.5 * (gu[1] + gu[2]),
                     "vx" => k.v[0],
                     "vy" => k.v[1],
                     "speed" => k.v[0].hypot(k.v[1]),
