@@ -345,7 +345,7 @@ fn ctrl_c_cancels_the_run_and_writes_the_summary() {
     let dir = tempfile::tempdir().unwrap();
     let file = write(dir.path(), "scene.json", &text);
     let out = dir.path().join("out");
-    let mut child = Command::new(env!("CARGO_BIN_EXE_fracture"))
+    let child = Command::new(env!("CARGO_BIN_EXE_fracture"))
         .args([
             "run",
             file.to_str().unwrap(),
