@@ -134,6 +134,10 @@ pub struct Cracks {
     cell_start: Vec<u32>,
     cell_segs: Vec<(u32, u32)>,
     entries: Vec<(u32, u32, i32, [f64; 2])>,
+    /// Normal contact impulse |Δp_n| of the last force-stage contact at each node (dense over
+    /// grid storage): the friction capacity of faces that are in contact but not approaching
+    /// at the extrapolation stages.
+    normal_impulse: Vec<f64>,
     ncx: usize,
     ncy: usize,
 }
@@ -239,6 +243,7 @@ impl Cracks {
             cell_start: Vec::new(),
             cell_segs: Vec::new(),
             entries: Vec::new(),
+            normal_impulse: vec![0.0; geom.storage_len()],
             ncx: geom.nx - 1,
             ncy: geom.ny - 1,
         }
@@ -447,6 +452,7 @@ impl Cracks {
             ];
             let n = info.normal;
             let dn = d[0] * n[0] + d[1] * n[1];
+            let node_index = f1_index[s] as usize;
             let law = &self.cracks[info.crack as usize].contact;
             let applied = match law {
                 ContactLaw::Stick => d,
@@ -455,22 +461,44 @@ impl Cracks {
                     let ua = [a.u[0] / a.m, a.u[1] / a.m];
                     let ub = [b.u[0] / b.m, b.u[1] / b.m];
                     let sep = (ub[0] - ua[0]) * n[0] + (ub[1] - ua[1]) * n[1];
-                    if !(sep < 0.0 && dn < 0.0) {
+                    let approaching = dn < 0.0;
+                    if stage == Stage::Forces {
+                        self.normal_impulse[node_index] =
+                            if sep < 0.0 && approaching { -dn } else { 0.0 };
+                    }
+                    let held = self.normal_impulse[node_index];
+                    let friction = match law {
+                        ContactLaw::Coulomb { friction } => *friction,
+                        _ => 0.0,
+                    };
+                    // In contact: overlapping and approaching; or, for friction at the
+                    // extrapolation stages, overlapping and still pressed by the normal force
+                    // of the last force stage (a static contact does not approach).
+                    let pressed = stage != Stage::Forces && friction > 0.0 && held > 0.0;
+                    if !(sep < 0.0 && (approaching || pressed)) {
                         continue;
                     }
-                    let normal = [dn * n[0], dn * n[1]];
-                    match law {
-                        ContactLaw::Coulomb { friction } => {
-                            let t = [d[0] - normal[0], d[1] - normal[1]];
-                            let tl = norm(t);
-                            let limit = friction * (-dn);
-                            if tl > limit {
-                                [normal[0] + limit * t[0] / tl, normal[1] + limit * t[1] / tl]
-                            } else {
-                                d
-                            }
+                    let normal = if approaching {
+                        [dn * n[0], dn * n[1]]
+                    } else {
+                        [0.0, 0.0]
+                    };
+                    if friction > 0.0 {
+                        let t = [d[0] - dn * n[0], d[1] - dn * n[1]];
+                        let tl = norm(t);
+                        let capacity = if stage == Stage::Forces {
+                            -dn
+                        } else {
+                            held.max(-dn)
+                        };
+                        let limit = friction * capacity.max(0.0);
+                        if tl > limit {
+                            [normal[0] + limit * t[0] / tl, normal[1] + limit * t[1] / tl]
+                        } else {
+                            [normal[0] + t[0], normal[1] + t[1]]
                         }
-                        _ => normal,
+                    } else {
+                        normal
                     }
                 }
             };
