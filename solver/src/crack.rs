@@ -62,6 +62,9 @@ pub struct TipState {
     pub active: bool,
     /// Total growth of this tip (m).
     pub advance: f64,
+    /// Energy released by its growth per unit thickness (J/m): Σ G·Δa over growth steps,
+    /// with G the energy release rate that triggered each step.
+    pub released: f64,
     /// (time, advance) over the last speed window.
     history: VecDeque<(f64, f64)>,
     /// The tip advanced in the last step.
@@ -1071,6 +1074,7 @@ impl Cracks {
                     c.pts.push(CrackPoint::at(new));
                 }
                 c.tips[t].advance += step_len;
+                c.tips[t].released += g * step_len;
                 c.tips[t].grew = true;
                 c.tips[t].cached_j = None;
                 any = true;
