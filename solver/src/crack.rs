@@ -90,11 +90,7 @@ pub struct Crack {
 impl Crack {
     /// Current length along the path, without the mouth extensions.
     pub fn length(&self) -> f64 {
-        let l: f64 = self
-            .pts
-            .windows(2)
-            .map(|w| dist(w[0].x, w[1].x))
-            .sum();
+        let l: f64 = self.pts.windows(2).map(|w| dist(w[0].x, w[1].x)).sum();
         l - self.ext[0] - self.ext[1]
     }
 
@@ -387,7 +383,12 @@ impl Cracks {
                             return Err((geom.index(ix, iy), 3));
                         }
                         mask |= 1 << (3 * a + b);
-                        entries.push((geom.index(ix, iy) as u32, ci, if above { 1 } else { -1 }, n));
+                        entries.push((
+                            geom.index(ix, iy) as u32,
+                            ci,
+                            if above { 1 } else { -1 },
+                            n,
+                        ));
                     }
                 }
             }
@@ -415,7 +416,11 @@ impl Cracks {
             f1_index.push(node);
             self.slots.push(SlotInfo {
                 above_is_f1: votes >= 0,
-                normal: if l > 0.0 { [n[0] / l, n[1] / l] } else { [0.0, -1.0] },
+                normal: if l > 0.0 {
+                    [n[0] / l, n[1] / l]
+                } else {
+                    [0.0, -1.0]
+                },
                 crack,
             });
         }
@@ -543,6 +548,7 @@ impl Cracks {
 
     /// The field of node `index` on the same side as `from` (a point just off the crack):
     /// field 0 when the line from → node does not cross a crack, field 1 when it does.
+    #[allow(clippy::too_many_arguments)]
     fn side_node<'n>(
         &self,
         geom: &GridGeom,
@@ -653,7 +659,10 @@ impl Cracks {
                 } else {
                     p.above = [p.above[0] + dt * va[0], p.above[1] + dt * va[1]];
                     p.below = [p.below[0] + dt * vb[0], p.below[1] + dt * vb[1]];
-                    p.x = [0.5 * (p.above[0] + p.below[0]), 0.5 * (p.above[1] + p.below[1])];
+                    p.x = [
+                        0.5 * (p.above[0] + p.below[0]),
+                        0.5 * (p.above[1] + p.below[1]),
+                    ];
                 }
             }
         }
@@ -693,6 +702,9 @@ impl View<'_> {
         }
     }
 }
+
+/// One edge of the J contour: from node, to node, outward normal.
+type ContourEdge = ((usize, usize), (usize, usize), [f64; 2]);
 
 /// J of one tip with what K needs.
 #[derive(Debug, Clone, Copy, Default)]
@@ -835,7 +847,7 @@ impl Cracks {
         // Walk the square counter-clockwise: bottom, right, top, left edges.
         let (cx0, cx1) = ((c0 - n) as usize, (c0 + n) as usize);
         let (cy0, cy1) = ((r0 - n) as usize, (r0 + n) as usize);
-        let mut edges: Vec<((usize, usize), (usize, usize), [f64; 2])> = Vec::new();
+        let mut edges: Vec<ContourEdge> = Vec::new();
         for ix in cx0..cx1 {
             edges.push(((ix, cy0), (ix + 1, cy0), [0.0, -1.0]));
         }
@@ -927,7 +939,10 @@ impl Cracks {
         } else {
             sub(p.below, p.above)
         };
-        [cod[0] * e2[0] + cod[1] * e2[1], cod[0] * e1[0] + cod[1] * e1[1]]
+        [
+            cod[0] * e2[0] + cod[1] * e2[1],
+            cod[0] * e1[0] + cod[1] * e1[1],
+        ]
     }
 
     /// Crack-tip rows now.
@@ -1023,7 +1038,10 @@ impl Cracks {
                     GrowthDirection::MaxEnergyRelease => {
                         let th = j2.atan2(j1);
                         let (s, co) = th.sin_cos();
-                        (j1.hypot(j2), [co * e1[0] + s * e2[0], co * e1[1] + s * e2[1]])
+                        (
+                            j1.hypot(j2),
+                            [co * e1[0] + s * e2[0], co * e1[1] + s * e2[1]],
+                        )
                     }
                     GrowthDirection::Fixed(d) => {
                         let l = norm(d).max(1e-300);

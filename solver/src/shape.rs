@@ -187,7 +187,10 @@ mod tests {
                 .map_or(0.0, |k| w.s[k])
         };
         for node in 8..14 {
-            assert!((node_w(&a, node) - node_w(&b, node)).abs() < 1e-9, "node {node}");
+            assert!(
+                (node_w(&a, node) - node_w(&b, node)).abs() < 1e-9,
+                "node {node}"
+            );
         }
     }
 }

@@ -45,9 +45,7 @@ pub enum BuildError {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum StepError {
     /// A particle quantity became NaN or infinite.
-    #[error(
-        "step {step}: {quantity} of particle {particle} at ({x:.6e}, {y:.6e}) m is not finite"
-    )]
+    #[error("step {step}: {quantity} of particle {particle} at ({x:.6e}, {y:.6e}) m is not finite")]
     NonFinite {
         /// Step number.
         step: u64,
@@ -279,10 +277,7 @@ impl Simulation {
         let mut id = 0u32;
         fracture_api::lattice::for_each_seed(scene, |s| {
             let body = &scene.bodies[s.body as usize];
-            let mat = names
-                .iter()
-                .position(|n| **n == body.material)
-                .unwrap_or(0);
+            let mat = names.iter().position(|n| **n == body.material).unwrap_or(0);
             let sub = h / s.ppc as f64;
             let vol = sub * sub * scene.thickness;
             let load = scene
@@ -528,7 +523,14 @@ impl Simulation {
 
         // Crack surfaces move with the grid velocities (§5).
         if let Some(cr) = self.cracks.as_mut() {
-            cr.move_surfaces(&self.geom, &self.nodes, &self.f1, &self.slot_of, self.m_tiny, dt);
+            cr.move_surfaces(
+                &self.geom,
+                &self.nodes,
+                &self.f1,
+                &self.slot_of,
+                self.m_tiny,
+                dt,
+            );
         }
 
         // Pass 4: second stress half-update; positions committed.
@@ -770,7 +772,14 @@ impl Simulation {
 
     fn contact(&mut self, stage: Stage) {
         if let Some(cr) = self.cracks.as_mut() {
-            let d = cr.contact(stage, &mut self.nodes, &mut self.f1, &self.f1_index, self.m_tiny, self.dt);
+            let d = cr.contact(
+                stage,
+                &mut self.nodes,
+                &mut self.f1,
+                &self.f1_index,
+                self.m_tiny,
+                self.dt,
+            );
             self.dissipated += d;
         }
     }
@@ -1274,9 +1283,7 @@ impl Simulation {
                     "ux" => k.x[0] - p.cold[i].x0[0],
                     "uy" => k.x[1] - p.cold[i].x0[1],
                     // N = h(σ1 − σ2)/f_σ, σ1 − σ2 = 2·sqrt(((σxx − σyy)/2)² + σxy²).
-                    "fringe" => {
-                        thickness * 2.0 * (0.5 * (s[0] - s[1])).hypot(s[2]) / fringe_c
-                    }
+                    "fringe" => thickness * 2.0 * (0.5 * (s[0] - s[1])).hypot(s[2]) / fringe_c,
                     "material" => p.mech[i].mat as f64,
                     _ => 0.0,
                 };
@@ -1327,11 +1334,7 @@ impl Simulation {
             cell_size: g.h,
             fields: fields.iter().map(|f| f.name().to_string()).collect(),
             components,
-            cracks: self
-                .cracks
-                .as_ref()
-                .map(|c| c.lines())
-                .unwrap_or_default(),
+            cracks: self.cracks.as_ref().map(|c| c.lines()).unwrap_or_default(),
         }
     }
 }

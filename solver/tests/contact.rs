@@ -22,7 +22,13 @@ fn cracks_with(law: serde_json::Value) -> Cracks {
 }
 
 fn node(v: &[f64]) -> Node {
-    Node { m: v[0], p: [v[1], v[2]], f: [v[3], v[4]], q: [v[5], v[6]], u: [v[7], v[8]] }
+    Node {
+        m: v[0],
+        p: [v[1], v[2]],
+        f: [v[3], v[4]],
+        q: [v[5], v[6]],
+        u: [v[7], v[8]],
+    }
 }
 
 proptest! {
@@ -84,7 +90,13 @@ fn compression_across_a_crack_does_not_interpenetrate() {
         "time": {"end": 4.0e-5}
     }));
     let mut sim = sim(&s, 0);
-    let side0: Vec<(u32, bool)> = sim.particles().kin.iter().zip(&sim.particles().cold).map(|(k, c)| (c.id, k.x[1] > yc)).collect();
+    let side0: Vec<(u32, bool)> = sim
+        .particles()
+        .kin
+        .iter()
+        .zip(&sim.particles().cold)
+        .map(|(k, c)| (c.id, k.x[1] > yc))
+        .collect();
     let mut side0 = side0;
     side0.sort();
     let mut worst: f64 = 0.0;
@@ -97,7 +109,11 @@ fn compression_across_a_crack_does_not_interpenetrate() {
         for wv in line.windows(2) {
             let (a, b) = (wv[0], wv[1]);
             if (a[0] <= x && x <= b[0]) || (b[0] <= x && x <= a[0]) {
-                let t = if b[0] != a[0] { (x - a[0]) / (b[0] - a[0]) } else { 0.0 };
+                let t = if b[0] != a[0] {
+                    (x - a[0]) / (b[0] - a[0])
+                } else {
+                    0.0
+                };
                 return a[1] + t * (b[1] - a[1]);
             }
         }
@@ -115,7 +131,11 @@ fn compression_across_a_crack_does_not_interpenetrate() {
     eprintln!("crossed {crossed}; {e:?}; worst |error| {worst:e}");
     assert!(e.external_work > 0.0);
     assert_eq!(crossed, 0, "{crossed} particles crossed the crack");
-    assert!(worst < 0.02 * e.external_work, "energy error {worst:e} vs work {:e}", e.external_work);
+    assert!(
+        worst < 0.02 * e.external_work,
+        "energy error {worst:e} vs work {:e}",
+        e.external_work
+    );
 }
 
 /// Coulomb friction: with a normal pressure p and a shear τ on the upper half of a block cut
@@ -172,14 +192,23 @@ fn coulomb_sliding_starts_only_past_the_friction_limit() {
         // Slip accumulated once the load is fully applied (second half of the run).
         let growth = slip(&sim) - half.unwrap();
         let e = sim.energy();
-        eprintln!("tau {tau:.0}: slip growth {growth:e} m, friction+damping {:e} J", e.dissipated);
+        eprintln!(
+            "tau {tau:.0}: slip growth {growth:e} m, friction+damping {:e} J",
+            e.dissipated
+        );
         growth
     };
     let bonded = run(0.5 * 0.3e6, json!({"law": "stick"}));
     let stick = run(0.5 * 0.3e6, json!({"law": "coulomb", "friction": 0.3}));
     let slide = run(1.5 * 0.3e6, json!({"law": "coulomb", "friction": 0.3}));
     assert!(slide > 1.0e-6, "no sliding past the limit: {slide:e}");
-    assert!(stick.abs() < 0.02 * slide, "sliding below the limit: {stick:e} vs {slide:e}");
+    assert!(
+        stick.abs() < 0.02 * slide,
+        "sliding below the limit: {stick:e} vs {slide:e}"
+    );
     // Below the limit the faces behave like bonded faces (only elastic motion).
-    assert!(stick.abs() <= 1.2 * bonded.abs() + 1e-9, "{stick:e} vs bonded {bonded:e}");
+    assert!(
+        stick.abs() <= 1.2 * bonded.abs() + 1e-9,
+        "{stick:e} vs bonded {bonded:e}"
+    );
 }

@@ -23,16 +23,43 @@ fn cracks(points: serde_json::Value) -> (Cracks, GridGeom) {
 }
 
 /// Field of the pair (particle at x, node (ix, iy)) and the node's slot record.
-fn field_of(c: &mut Cracks, geom: &GridGeom, x: [f64; 2], node: (usize, usize)) -> (u8, Option<fracture_solver::crack::SlotInfo>) {
+fn field_of(
+    c: &mut Cracks,
+    geom: &GridGeom,
+    x: [f64; 2],
+    node: (usize, usize),
+) -> (u8, Option<fracture_solver::crack::SlotInfo>) {
     let kin = [Kin { x, v: [0.0; 2] }];
-    let mech = [Mech { m: 1.0, vol: 1.0, lh: 0.25, w: 0.0, mat: 0, load: 0 }];
+    let mech = [Mech {
+        m: 1.0,
+        vol: 1.0,
+        lh: 0.25,
+        w: 0.0,
+        mat: 0,
+        load: 0,
+    }];
     let mut fmask = [0u16];
     let mut f1 = Vec::new();
-    c.assign_fields(geom, fracture_api::scene::ShapeFunction::Gimp, &kin, &mech, &mut fmask, &mut f1).unwrap();
-    let w = fracture_solver::shape::Weights2::new(fracture_api::scene::ShapeFunction::Gimp, geom.xi(x), 0.25);
+    c.assign_fields(
+        geom,
+        fracture_api::scene::ShapeFunction::Gimp,
+        &kin,
+        &mech,
+        &mut fmask,
+        &mut f1,
+    )
+    .unwrap();
+    let w = fracture_solver::shape::Weights2::new(
+        fracture_api::scene::ShapeFunction::Gimp,
+        geom.xi(x),
+        0.25,
+    );
     let a = node.0 as i32 - w.x.base;
     let b = node.1 as i32 - w.y.base;
-    assert!((0..3).contains(&a) && (0..3).contains(&b), "node not in the particle's stencil");
+    assert!(
+        (0..3).contains(&a) && (0..3).contains(&b),
+        "node not in the particle's stencil"
+    );
     let bit = ((fmask[0] >> (3 * a + b) as u32) & 1) as u8;
     let idx = geom.index(node.0, node.1) as u32;
     let slot = f1.iter().position(|&i| i == idx).map(|s| c.slots[s]);
@@ -55,7 +82,11 @@ fn straight_crack_separates_the_two_sides() {
     assert_eq!(f, 1);
     let s = slot.unwrap();
     assert!(!s.above_is_f1);
-    assert!((s.normal[0]).abs() < 1e-12 && (s.normal[1] + 1.0).abs() < 1e-12, "normal above→below {:?}", s.normal);
+    assert!(
+        (s.normal[0]).abs() < 1e-12 && (s.normal[1] + 1.0).abs() < 1e-12,
+        "normal above→below {:?}",
+        s.normal
+    );
     // Same particle, node on its own side: field 0.
     assert_eq!(field_of(&mut c, &g, [4.25, 5.25], (4, 5)).0, 0);
     // Particle above, node below: field 1 holding the above side.
@@ -74,7 +105,10 @@ fn kinked_crack_uses_the_crossed_segment() {
     assert_eq!(f, 1);
     let n = slot.unwrap().normal;
     let r = std::f64::consts::FRAC_1_SQRT_2;
-    assert!((n[0] - r).abs() < 1e-9 && (n[1] + r).abs() < 1e-9, "normal of the inclined segment {n:?}");
+    assert!(
+        (n[0] - r).abs() < 1e-9 && (n[1] + r).abs() < 1e-9,
+        "normal of the inclined segment {n:?}"
+    );
     // Not across: node (9, 7) on the same side.
     assert_eq!(field_of(&mut c, &g, [8.25, 7.25], (9, 7)).0, 0);
 }
@@ -83,8 +117,16 @@ fn kinked_crack_uses_the_crossed_segment() {
 fn node_exactly_on_the_crack_counts_as_above() {
     // Crack along the node row y = 5 (tie rule: on the line counts as above/left).
     let (mut c, g) = cracks(json!([[2.0, 5.0], [9.0, 5.0]]));
-    assert_eq!(field_of(&mut c, &g, [4.25, 4.75], (4, 5)).0, 1, "below particle to on-line node crosses");
-    assert_eq!(field_of(&mut c, &g, [4.25, 5.25], (4, 5)).0, 0, "above particle to on-line node does not");
+    assert_eq!(
+        field_of(&mut c, &g, [4.25, 4.75], (4, 5)).0,
+        1,
+        "below particle to on-line node crosses"
+    );
+    assert_eq!(
+        field_of(&mut c, &g, [4.25, 5.25], (4, 5)).0,
+        0,
+        "above particle to on-line node does not"
+    );
 }
 
 #[test]
@@ -110,5 +152,9 @@ fn edge_crack_mouth_is_not_a_tip_and_separates_at_the_surface() {
     // A surface particle at the very edge to the outside node row below/above is separated too.
     assert_eq!(field_of(&mut c, &g, [1.25, 5.75], (1, 5)).0, 1);
     // Reported length excludes the 2h extension of the mouth.
-    assert!((c.cracks[0].length() - 5.05).abs() < 1e-12, "length {}", c.cracks[0].length());
+    assert!(
+        (c.cracks[0].length() - 5.05).abs() < 1e-12,
+        "length {}",
+        c.cracks[0].length()
+    );
 }

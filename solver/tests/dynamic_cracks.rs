@@ -43,7 +43,8 @@ fn freund(contour: u32) -> Vec<(f64, f64, f64)> {
         sim.step().unwrap();
         let dt = sim.time() - t_c;
         if dt > 0.0 {
-            let k_ref = 2.0 * sigma * (c_l * dt * (1.0 - 2.0 * nu) / std::f64::consts::PI).sqrt() / (1.0 - nu);
+            let k_ref = 2.0 * sigma * (c_l * dt * (1.0 - 2.0 * nu) / std::f64::consts::PI).sqrt()
+                / (1.0 - nu);
             let r = sim.crack_tips()[0];
             out.push((dt, r.k1, k_ref));
         }
@@ -66,7 +67,11 @@ fn freund_step_wave() {
         }
     }
     for &(dt, k, k_ref) in rows.iter().step_by(10) {
-        eprintln!("t-tc {:.2} us  K {k:.0}  Freund {k_ref:.0}  ({:+.2} %)", dt * 1e6, 100.0 * (k - k_ref) / k_ref);
+        eprintln!(
+            "t-tc {:.2} us  K {k:.0}  Freund {k_ref:.0}  ({:+.2} %)",
+            dt * 1e6,
+            100.0 * (k - k_ref) / k_ref
+        );
     }
     eprintln!("worst {:.2} % over {n} samples", 100.0 * worst);
     assert!(n > 50);
@@ -87,7 +92,10 @@ fn freund_path_independence() {
             worst = worst.max((ja - jb).abs() / ja);
         }
     }
-    eprintln!("worst J difference between contours 2 and 3: {:.2} %", 100.0 * worst);
+    eprintln!(
+        "worst J difference between contours 2 and 3: {:.2} %",
+        100.0 * worst
+    );
     assert!(worst < 0.05);
 }
 
@@ -144,9 +152,19 @@ fn edge_crack_propagates_at_the_toughness() {
         "grew {:.2} mm in {grew_steps} steps, max speed {max_speed:.0} m/s (c_L {c_l:.0}), released per area {per_area:.2} J/m² (G_c {gc})",
         tip.advance * 1e3
     );
-    assert!(tip.advance > 5.0 * h, "the crack barely grew: {} m", tip.advance);
-    assert!(max_speed <= c_l * (1.0 + 1e-9), "tip faster than c_L: {max_speed}");
-    assert!((gc..=1.5 * gc).contains(&per_area), "released per area {per_area} vs {gc}");
+    assert!(
+        tip.advance > 5.0 * h,
+        "the crack barely grew: {} m",
+        tip.advance
+    );
+    assert!(
+        max_speed <= c_l * (1.0 + 1e-9),
+        "tip faster than c_L: {max_speed}"
+    );
+    assert!(
+        (gc..=1.5 * gc).contains(&per_area),
+        "released per area {per_area} vs {gc}"
+    );
 }
 
 /// Stable propagation: a double cantilever beam (arms 5 mm thick, initial crack 20 mm) opened
@@ -202,8 +220,18 @@ fn dcb_grows_stably_at_the_toughness() {
         "DCB grew {:.2} mm; G at growth in [{g_min:.2}, {g_max:.2}] J/m²; released per area {per_area:.2} J/m² (G_c {gc}); max speed {max_speed:.0} m/s",
         tip.advance * 1e3
     );
-    assert!(tip.advance > 4.0 * h, "the crack barely grew: {} m", tip.advance);
-    assert!(g_min >= gc && g_max <= 1.25 * gc, "G band [{g_min}, {g_max}]");
-    assert!((per_area - gc).abs() / gc < 0.10, "released per area {per_area} vs {gc}");
+    assert!(
+        tip.advance > 4.0 * h,
+        "the crack barely grew: {} m",
+        tip.advance
+    );
+    assert!(
+        g_min >= gc && g_max <= 1.25 * gc,
+        "G band [{g_min}, {g_max}]"
+    );
+    assert!(
+        (per_area - gc).abs() / gc < 0.10,
+        "released per area {per_area} vs {gc}"
+    );
     assert!(max_speed <= c_l * (1.0 + 1e-9));
 }

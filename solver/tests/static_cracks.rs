@@ -35,7 +35,9 @@ fn average_tips(s: &fracture_api::Scene, frac: f64) -> Vec<[f64; 4]> {
             n += 1.0;
         }
     }
-    sums.iter().map(|s| [s[0] / n, s[1] / n, s[2] / n, s[3] / n]).collect()
+    sums.iter()
+        .map(|s| [s[0] / n, s[1] / n, s[2] / n, s[3] / n])
+        .collect()
 }
 
 fn center_crack_scene(h: f64, contour: u32) -> (fracture_api::Scene, f64) {
@@ -74,7 +76,14 @@ fn center_crack_mode_one() {
     assert_eq!(tips.len(), 2);
     for t in &tips {
         let err = (t[2] - k_ref) / k_ref;
-        eprintln!("J1 {:.4} J2 {:.4} KI {:.0} KII {:.0} (ref {k_ref:.0}, err {:.2} %)", t[0], t[1], t[2], t[3], 100.0 * err);
+        eprintln!(
+            "J1 {:.4} J2 {:.4} KI {:.0} KII {:.0} (ref {k_ref:.0}, err {:.2} %)",
+            t[0],
+            t[1],
+            t[2],
+            t[3],
+            100.0 * err
+        );
         assert!(err.abs() < 0.03, "K_I {} vs {k_ref}", t[2]);
         assert!(t[3].abs() < 0.03 * k_ref, "K_II {}", t[3]);
     }
@@ -129,7 +138,12 @@ fn edge_crack_mode_one() {
     assert_eq!(tips.len(), 1, "the mouth is not a tip");
     let t = tips[0];
     let err = (t[2] - k_ref) / k_ref;
-    eprintln!("edge crack: KI {:.0} KII {:.0} ref {k_ref:.0} err {:.2} %", t[2], t[3], 100.0 * err);
+    eprintln!(
+        "edge crack: KI {:.0} KII {:.0} ref {k_ref:.0} err {:.2} %",
+        t[2],
+        t[3],
+        100.0 * err
+    );
     assert!(err.abs() < 0.05, "K_I {} vs {k_ref}", t[2]);
 }
 
@@ -166,8 +180,20 @@ fn center_crack_mode_two() {
     let k_ref = tau * (std::f64::consts::PI * a).sqrt();
     let tips = average_tips(&s, 0.2);
     for t in &tips {
-        eprintln!("shear: J1 {:.4} KI {:.0} KII {:.0} ref {k_ref:.0}", t[0], t[2], t[3]);
-        assert!((t[3].abs() - k_ref).abs() / k_ref < 0.05, "K_II {} vs {k_ref}", t[3]);
-        assert!(t[2].abs() < 0.05 * t[3].abs(), "K_I {} with K_II {}", t[2], t[3]);
+        eprintln!(
+            "shear: J1 {:.4} KI {:.0} KII {:.0} ref {k_ref:.0}",
+            t[0], t[2], t[3]
+        );
+        assert!(
+            (t[3].abs() - k_ref).abs() / k_ref < 0.05,
+            "K_II {} vs {k_ref}",
+            t[3]
+        );
+        assert!(
+            t[2].abs() < 0.05 * t[3].abs(),
+            "K_I {} with K_II {}",
+            t[2],
+            t[3]
+        );
     }
 }
