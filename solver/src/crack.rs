@@ -768,7 +768,7 @@ impl Cracks {
             }
             let m = p.mech[i];
             let s = p.stress[i];
-            let gu = p.cold[i].grad_u;
+            let gu = p.grad_u[i];
             let rho = m.m / m.vol;
             let ke = 0.5 * rho * (k.v[0] * k.v[0] + k.v[1] * k.v[1]);
             let pv = [s[0], s[1], s[2], gu[0], gu[1], gu[2], gu[3], m.w, ke];

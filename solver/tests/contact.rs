@@ -28,6 +28,7 @@ fn node(v: &[f64]) -> Node {
         f: [v[3], v[4]],
         q: [v[5], v[6]],
         u: [v[7], v[8]],
+        ..Node::default()
     }
 }
 
