@@ -1079,9 +1079,9 @@ impl Simulation {
                 if mech.load > 0 {
                     let t = loads[mech.load as usize - 1];
                     let edge = 2.0 * mech.lh * h;
-                    acc.w += edge
-                        * (t[0] * 0.5 * (v_old[0] + v[0]) + t[1] * 0.5 * (v_old[1] + v[1]))
-                        * dt;
+                    // Work on the grid: F · v̄ Δt with v̄ the mid-step grid velocity at the
+                    // particle (the velocity that moves it), consistent with the grid's energy.
+                    acc.w += edge * (t[0] * vbar[0] + t[1] * vbar[1]) * dt;
                 }
                 // Re-extrapolate momentum with the same weights and fields (pitfall 2).
                 let mv = [mech.m * v[0], mech.m * v[1]];
