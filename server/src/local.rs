@@ -1,25 +1,403 @@
-//! Local commands: `run`, `validate`, `schema`, `bench`.
+//! Local commands: `run`, `validate`, `schema`, `bench` (`api.md`, command line;
+//! `run-output.md` for the run directory and exit status).
+//!
+//! Exit status: 0 success; 1 an output or system error (files, threads); 2 an invalid or
+//! unreadable scene (every problem on stderr with its JSON path and value); 3 a run that
+//! failed numerically (the message says at which step and where). A run keeps its partial
+//! outputs in every case.
 
+// A command-line tool prints its results on stdout.
+#![allow(clippy::print_stdout)]
+
+use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
+use std::time::{Duration, Instant};
+
+use anyhow::Context;
+use fracture_api::Scene;
+use fracture_api::results::{CrackTipRow, EnergyRow, Progress, RunStatus, Snapshot, Summary};
+use fracture_api::validate::{RunSize, parse_scene, scene_from_value, validate as validate_scene};
+use fracture_solver::{Simulation, SolverConfig};
+use fracture_worker::{Control, LocalOutput, RunOptions, RunSink, SinkError, run_scene};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+/// Exit status of an output or system error.
+const EXIT_ERROR: u8 = 1;
+/// Exit status of an invalid scene.
+const EXIT_INVALID: u8 = 2;
+/// Exit status of a numerical failure.
+const EXIT_FAILED: u8 = 3;
 
 /// Arguments of `fracture bench`.
 #[derive(clap::Args, Debug)]
-pub struct BenchArgs {}
+pub struct BenchArgs {
+    /// Which benchmark.
+    #[arg(value_enum, default_value_t = BenchKind::Throughput)]
+    pub kind: BenchKind,
+    /// Timed steps.
+    #[arg(long, default_value_t = 50)]
+    pub steps: u64,
+    /// Untimed warm-up steps before them.
+    #[arg(long, default_value_t = 5)]
+    pub warmup: u64,
+    /// Solver threads (0 = one per core).
+    #[arg(long, default_value_t = 0)]
+    pub threads: usize,
+    /// Cell size (m) of the block's grid; 0.0005 gives the seed's 500,000 particles,
+    /// 0.002 about 31,000 (a CI-sized run).
+    #[arg(long, default_value_t = 0.0005)]
+    pub cell_size: f64,
+    /// Particles per cell direction.
+    #[arg(long, default_value_t = 2)]
+    pub particles_per_cell: u32,
+    /// Print the result as JSON.
+    #[arg(long)]
+    pub json: bool,
+}
+
+/// The benchmarks of `fracture bench`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum BenchKind {
+    /// Particle-steps per second on the seed's impacted Homalite block (125 mm × 250 mm,
+    /// plane strain, GIMP, no cracks).
+    Throughput,
+}
+
+/// A scene that could not be loaded: what to print and the exit status.
+struct LoadError {
+    message: String,
+    code: u8,
+}
+
+impl LoadError {
+    fn report(self) -> ExitCode {
+        eprintln!("{}", self.message);
+        ExitCode::from(self.code)
+    }
+}
+
+/// Read, parse and validate a scene file.
+fn load_scene(path: &Path) -> Result<(Scene, RunSize), LoadError> {
+    let text = std::fs::read_to_string(path).map_err(|e| LoadError {
+        message: format!("error: cannot read {}: {e}", path.display()),
+        code: EXIT_INVALID,
+    })?;
+    let invalid = |errors: fracture_api::ValidationErrors| LoadError {
+        message: format!(
+            "error: {} is not a valid scene:\n{}",
+            path.display(),
+            errors
+                .0
+                .iter()
+                .map(|e| format!("  {e}"))
+                .collect::<Vec<_>>()
+                .join("\n")
+        ),
+        code: EXIT_INVALID,
+    };
+    let scene = parse_scene(&text).map_err(invalid)?;
+    let size = validate_scene(&scene).map_err(invalid)?;
+    Ok((scene, size))
+}
+
+/// The sink of `fracture run`: the run directory, plus a progress bar on a terminal.
+struct CliSink {
+    out: LocalOutput,
+    bar: Option<ProgressBar>,
+    /// Writing the results failed (as opposed to the physics).
+    output_failed: bool,
+}
+
+impl CliSink {
+    fn check<T>(&mut self, r: Result<T, SinkError>) -> Result<T, SinkError> {
+        if r.is_err() {
+            self.output_failed = true;
+        }
+        r
+    }
+}
+
+impl RunSink for CliSink {
+    fn progress(&mut self, p: &Progress) -> Result<Control, SinkError> {
+        if let Some(bar) = &self.bar {
+            bar.set_position(p.step);
+            bar.set_message(format!("t = {:.3e} s", p.sim_time));
+        }
+        let r = self.out.progress(p);
+        self.check(r)
+    }
+    fn energy(&mut self, rows: &[EnergyRow]) -> Result<(), SinkError> {
+        let r = self.out.energy(rows);
+        self.check(r)
+    }
+    fn crack_tips(&mut self, rows: &[CrackTipRow]) -> Result<(), SinkError> {
+        let r = self.out.crack_tips(rows);
+        self.check(r)
+    }
+    fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError> {
+        let r = self.out.snapshot(snap);
+        self.check(r)
+    }
+    fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
+        if let Some(bar) = self.bar.take() {
+            bar.finish_and_clear();
+        }
+        let r = self.out.finish(summary);
+        self.check(r)
+    }
+}
+
+fn progress_bar(steps: u64) -> Option<ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = ProgressBar::with_draw_target(Some(steps), ProgressDrawTarget::stderr());
+    let style = ProgressStyle::with_template(
+        "{elapsed_precise} [{wide_bar}] {pos}/{len} steps, {msg}, ETA {eta}",
+    )
+    .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style.progress_chars("=> "));
+    Some(bar)
+}
 
 /// `fracture run`.
-pub fn run(_scene: &Path, _out: &Path, _threads: usize) -> ExitCode {
-    ExitCode::FAILURE
+pub fn run(scene: &Path, out: &Path, threads: usize) -> ExitCode {
+    let (scene, size) = match load_scene(scene) {
+        Ok(s) => s,
+        Err(e) => return e.report(),
+    };
+    let mut output = match LocalOutput::create(out) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: cannot write the run directory: {e}");
+            return ExitCode::from(EXIT_ERROR);
+        }
+    };
+    if let Err(e) = output.write_scene(&scene) {
+        eprintln!("error: cannot write the run directory: {e}");
+        return ExitCode::from(EXIT_ERROR);
+    }
+    let bar = progress_bar(size.steps);
+    let opts = RunOptions {
+        threads,
+        flush_every: if bar.is_some() {
+            Duration::from_millis(200)
+        } else {
+            RunOptions::default().flush_every
+        },
+    };
+    let mut sink = CliSink {
+        out: output,
+        bar,
+        output_failed: false,
+    };
+    let summary = run_scene(&scene, &opts, &mut sink);
+    let message = summary.message.as_deref().unwrap_or("");
+    match summary.status {
+        RunStatus::Completed => {
+            println!(
+                "completed: {} steps to t = {:.4e} s, {} particles, {} threads, {:.2} s ({:.3e} particle-steps/s)",
+                summary.steps,
+                summary.sim_time,
+                summary.particles,
+                summary.threads,
+                summary.wall_seconds,
+                summary.particle_steps_per_second
+            );
+            println!("results in {}", out.display());
+            ExitCode::SUCCESS
+        }
+        RunStatus::Failed if sink.output_failed => {
+            eprintln!("error: {message}");
+            eprintln!("partial results in {}", out.display());
+            ExitCode::from(EXIT_ERROR)
+        }
+        RunStatus::Failed => {
+            eprintln!(
+                "error: the run failed after {} steps (t = {:.4e} s): {message}",
+                summary.steps, summary.sim_time
+            );
+            eprintln!("partial results in {}", out.display());
+            ExitCode::from(EXIT_FAILED)
+        }
+        RunStatus::Cancelled => {
+            eprintln!("cancelled after {} steps: {message}", summary.steps);
+            eprintln!("partial results in {}", out.display());
+            ExitCode::from(EXIT_ERROR)
+        }
+    }
 }
+
 /// `fracture validate`.
-pub fn validate(_scene: &Path) -> ExitCode {
-    ExitCode::FAILURE
+pub fn validate(scene: &Path) -> ExitCode {
+    match load_scene(scene) {
+        Ok((scene, size)) => {
+            println!("{}: valid", scene.name);
+            println!("particles: {}", size.particles);
+            println!("grid nodes: {}", size.grid_nodes);
+            println!("time step: {:e} s", size.time_step);
+            println!("steps: {}", size.steps);
+            ExitCode::SUCCESS
+        }
+        Err(e) => e.report(),
+    }
 }
+
 /// `fracture schema`.
 pub fn schema() -> ExitCode {
-    ExitCode::FAILURE
+    match serde_json::to_string_pretty(&Scene::json_schema()) {
+        Ok(s) => {
+            println!("{s}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_ERROR)
+        }
+    }
 }
+
+/// The seed's benchmark block: 125 mm × 250 mm Homalite (E = 5.2 GPa, ν = 0.34,
+/// ρ = 1230 kg/m³), plane strain, `ppc`² particles per cell, a grid box three cells larger
+/// on each side, struck at 20 m/s over the lower quarter of its left edge. The end time
+/// leaves room for `steps` steps.
+pub fn bench_block(cell_size: f64, ppc: u32, steps: u64) -> anyhow::Result<Scene> {
+    let h = cell_size;
+    let m = 3.0 * h;
+    let (w, l) = (0.125, 0.25);
+    let rho = 1230.0_f64;
+    let (e, nu) = (5.2e9_f64, 0.34_f64);
+    let cfl = 0.5;
+    let value = serde_json::json!({
+        "name": "bench-throughput-block",
+        "description": "The seed's impacted Homalite block (fracture bench throughput).",
+        "analysis": "plane_strain",
+        "thickness": 0.01,
+        "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [w + 2.0 * m, l + 2.0 * m],
+                 "shape_function": "gimp"},
+        "materials": {"homalite": {"model": "linear_elastic", "density": rho,
+                                    "youngs_modulus": e, "poissons_ratio": nu}},
+        "bodies": [{"material": "homalite",
+                    "region": {"rectangle": {"min": [m, m], "max": [m + w, m + l]}},
+                    "particles_per_cell": ppc}],
+        "boundary_conditions": [{
+            "region": {"rectangle": {"min": [0.0, 0.0], "max": [m, m + 0.25 * l]}},
+            "velocity": {"x": 20.0}
+        }],
+        "time": {"end": 1.0, "cfl": cfl}
+    });
+    let mut scene = scene_from_value(value).map_err(|e| anyhow::anyhow!("{e}"))?;
+    let dt = scene
+        .time_step()
+        .ok_or_else(|| anyhow::anyhow!("the benchmark block has no valid material"))?;
+    scene.time.end = (steps as f64 + 0.5) * dt;
+    Ok(scene)
+}
+
+/// Result of the throughput benchmark.
+#[derive(Debug, serde::Serialize)]
+struct Throughput {
+    benchmark: &'static str,
+    particles: usize,
+    grid_nodes: usize,
+    cell_size: f64,
+    particles_per_cell: u32,
+    threads: usize,
+    warmup_steps: u64,
+    steps: u64,
+    wall_seconds: f64,
+    seconds_per_step: f64,
+    particle_steps_per_second: f64,
+    solver_version: &'static str,
+}
+
+fn throughput(a: &BenchArgs) -> anyhow::Result<Result<Throughput, String>> {
+    let scene = bench_block(a.cell_size, a.particles_per_cell, a.warmup + a.steps)?;
+    if let Err(e) = validate_scene(&scene) {
+        anyhow::bail!("the benchmark block is not a valid scene:\n{e}");
+    }
+    let mut sim = Simulation::new(&scene, SolverConfig { threads: a.threads })
+        .context("building the benchmark block")?;
+    for _ in 0..a.warmup {
+        if let Err(e) = sim.step() {
+            return Ok(Err(e.to_string()));
+        }
+    }
+    let start = Instant::now();
+    for _ in 0..a.steps {
+        if let Err(e) = sim.step() {
+            return Ok(Err(e.to_string()));
+        }
+    }
+    let wall = start.elapsed().as_secs_f64();
+    let particles = sim.particle_count();
+    let rate = |n: f64| if wall > 0.0 { n / wall } else { 0.0 };
+    Ok(Ok(Throughput {
+        benchmark: "throughput",
+        particles,
+        grid_nodes: sim.grid_node_count(),
+        cell_size: a.cell_size,
+        particles_per_cell: a.particles_per_cell,
+        threads: sim.threads(),
+        warmup_steps: a.warmup,
+        steps: a.steps,
+        wall_seconds: wall,
+        seconds_per_step: if a.steps > 0 {
+            wall / a.steps as f64
+        } else {
+            0.0
+        },
+        particle_steps_per_second: rate(particles as f64 * a.steps as f64),
+        solver_version: fracture_api::SOLVER_VERSION,
+    }))
+}
+
 /// `fracture bench`.
-pub fn bench(_a: BenchArgs) -> ExitCode {
-    ExitCode::FAILURE
+pub fn bench(a: BenchArgs) -> ExitCode {
+    if !(a.cell_size.is_finite() && a.cell_size > 0.0) {
+        eprintln!(
+            "error: --cell-size {} must be a positive length (m)",
+            a.cell_size
+        );
+        return ExitCode::from(EXIT_INVALID);
+    }
+    let result = match a.kind {
+        BenchKind::Throughput => throughput(&a),
+    };
+    match result {
+        Ok(Ok(t)) => {
+            if a.json {
+                match serde_json::to_string_pretty(&t) {
+                    Ok(s) => println!("{s}"),
+                    Err(e) => {
+                        eprintln!("error: {e}");
+                        return ExitCode::from(EXIT_ERROR);
+                    }
+                }
+            } else {
+                println!(
+                    "throughput: {} particles ({} grid nodes), {} threads, {} steps after {} warm-up: \
+                     {:.3} s, {:.3e} s/step, {:.4e} particle-steps/s",
+                    t.particles,
+                    t.grid_nodes,
+                    t.threads,
+                    t.steps,
+                    t.warmup_steps,
+                    t.wall_seconds,
+                    t.seconds_per_step,
+                    t.particle_steps_per_second
+                );
+            }
+            ExitCode::SUCCESS
+        }
+        Ok(Err(step_error)) => {
+            eprintln!("error: the benchmark run failed: {step_error}");
+            ExitCode::from(EXIT_FAILED)
+        }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(EXIT_ERROR)
+        }
+    }
 }

@@ -10,6 +10,10 @@
 //! The solver does no IO and never logs. Parallel loops use rayon with a deterministic
 //! strip-coloured scatter, so results are bitwise identical for any thread count.
 
+pub mod crack;
+pub mod grid;
+pub mod material;
+pub mod particles;
 pub mod shape;
 pub mod sim;
 

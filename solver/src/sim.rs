@@ -1,8 +1,27 @@
-//! The simulation: build from a scene, step, observe.
+//! The simulation: build from a scene, step (USAVG, `algorithm.md` §2), observe.
+//!
+//! One step is four particle passes around three grid updates:
+//! 1. P2G: mass, momentum (and, with cracks, mass-weighted displacement) per velocity field;
+//!    then contact and velocity boundary conditions.
+//! 2. Velocity gradient from the grid, first stress half-update (Δt/2), internal and external
+//!    forces to the grid; then damping, boundary-condition force fix, contact.
+//! 3. Particle update (FLIP velocity, position with the average of old and new grid
+//!    velocities) and re-extrapolation of momentum with the same weights; then contact and
+//!    boundary conditions.
+//! 4. Velocity gradient from the re-extrapolated momenta, second stress half-update.
+//!
+//! The crack steps (fields, contact, crack motion, J, propagation) live in [`crate::crack`].
 
 use fracture_api::Scene;
-use fracture_api::results::{CrackTipRow, EnergyRow, Snapshot};
-use fracture_api::scene::FieldKind;
+use fracture_api::results::{CrackTipRow, EnergyRow, FieldComponent, Snapshot, field_components};
+use fracture_api::scene::{Analysis, Damping, FieldKind, ShapeFunction};
+use rayon::prelude::*;
+
+use crate::crack::Cracks;
+use crate::grid::{GridGeom, GridMut, Node, PAD, Reduce, STRIP, for_strips};
+use crate::material::Elastic;
+use crate::particles::{Cold, Kin, Mech, Particles, PartsMut};
+use crate::shape::Weights2;
 
 /// How the solver runs (not physics).
 #[derive(Debug, Clone, Copy, Default)]
@@ -26,7 +45,9 @@ pub enum BuildError {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum StepError {
     /// A particle quantity became NaN or infinite.
-    #[error("step {step}: {quantity} of particle {particle} at ({x:.6e}, {y:.6e}) m is not finite")]
+    #[error(
+        "step {step}: {quantity} of particle {particle} at ({x:.6e}, {y:.6e}) m is not finite"
+    )]
     NonFinite {
         /// Step number.
         step: u64,
@@ -34,13 +55,15 @@ pub enum StepError {
         particle: usize,
         /// Which quantity.
         quantity: &'static str,
-        /// Particle position x (last finite).
+        /// Particle position x (start of the step).
         x: f64,
         /// Particle position y.
         y: f64,
     },
     /// Total energy grew far beyond the energy put in.
-    #[error("step {step}: energy blow-up: kinetic + strain = {energy:.6e} J against {reference:.6e} J put in")]
+    #[error(
+        "step {step}: energy blow-up: kinetic + strain = {energy:.6e} J against {reference:.6e} J put in (initial energy + external work); reduce time.cfl or check the loads"
+    )]
     EnergyBlowUp {
         /// Step number.
         step: u64,
@@ -50,7 +73,9 @@ pub enum StepError {
         reference: f64,
     },
     /// A particle reached the grid edge.
-    #[error("step {step}: particle {particle} reached the grid edge at ({x:.6e}, {y:.6e}) m; enlarge grid.min/grid.max")]
+    #[error(
+        "step {step}: particle {particle} reached the grid edge at ({x:.6e}, {y:.6e}) m; enlarge grid.min/grid.max"
+    )]
     LeftGrid {
         /// Step number.
         step: u64,
@@ -62,7 +87,9 @@ pub enum StepError {
         y: f64,
     },
     /// A grid node needs more velocity fields than supported.
-    #[error("step {step}: node at ({x:.6e}, {y:.6e}) m needs {fields} velocity fields; at most {max} are supported (cracks too close together?)")]
+    #[error(
+        "step {step}: node at ({x:.6e}, {y:.6e}) m needs {fields} velocity fields; at most {max} are supported (two cracks within a cell of each other?)"
+    )]
     TooManyFields {
         /// Step number.
         step: u64,
@@ -86,36 +113,1062 @@ pub struct StepStats {
     pub active_nodes: usize,
 }
 
+/// A prescribed-velocity condition resolved to grid nodes.
+#[derive(Debug, Clone)]
+struct BcNodes {
+    nodes: Vec<u32>,
+    vx: Option<f64>,
+    vy: Option<f64>,
+    ramp: f64,
+    start: f64,
+    end: f64,
+}
+
+impl BcNodes {
+    /// Prescribed velocity components at time t (None where free or inactive).
+    fn velocity(&self, t: f64) -> [Option<f64>; 2] {
+        if t < self.start || t > self.end {
+            return [None, None];
+        }
+        let r = if self.ramp > 0.0 {
+            (t / self.ramp).min(1.0)
+        } else {
+            1.0
+        };
+        [self.vx.map(|v| v * r), self.vy.map(|v| v * r)]
+    }
+}
+
+/// A traction load: traction × thickness (N/m) and its ramp time.
+#[derive(Debug, Clone, Copy)]
+struct LoadForce {
+    t: [f64; 2],
+    ramp: f64,
+}
+
+/// Reduction of a particle pass: partial sums and the first offending particle.
+#[derive(Debug, Clone, Copy, Default)]
+pub(crate) struct Acc {
+    /// Kinetic energy (pass 3) or strain energy (pass 4).
+    pub e: f64,
+    /// External work of tractions (pass 3).
+    pub w: f64,
+    /// A particle drifted too far from its strip: re-sort before the next scatter.
+    pub resort: bool,
+    /// First failure: (sorted index, kind).
+    pub fail: Option<(usize, u8)>,
+    /// Active box in node columns/rows.
+    pub bx: [i64; 4],
+    /// Whether `bx` is set.
+    pub has_box: bool,
+}
+
+impl Reduce for Acc {
+    fn merge(self, r: Self) -> Self {
+        let bx = match (self.has_box, r.has_box) {
+            (true, true) => [
+                self.bx[0].min(r.bx[0]),
+                self.bx[1].max(r.bx[1]),
+                self.bx[2].min(r.bx[2]),
+                self.bx[3].max(r.bx[3]),
+            ],
+            (true, false) => self.bx,
+            _ => r.bx,
+        };
+        Acc {
+            e: self.e + r.e,
+            w: self.w + r.w,
+            resort: self.resort || r.resort,
+            fail: match (self.fail, r.fail) {
+                (Some(a), Some(b)) => Some(if a.0 <= b.0 { a } else { b }),
+                (a, b) => a.or(b),
+            },
+            bx,
+            has_box: self.has_box || r.has_box,
+        }
+    }
+}
+
+const FAIL_VELOCITY: u8 = 1;
+const FAIL_POSITION: u8 = 2;
+const FAIL_STRESS: u8 = 3;
+const FAIL_GRID: u8 = 4;
+
 /// A running simulation.
 pub struct Simulation {
     scene: Scene,
+    geom: GridGeom,
+    shape: ShapeFunction,
+    mats: Vec<Elastic>,
+    parts: Particles,
+    /// Field-0 nodes (storage layout of `GridGeom`).
+    nodes: Vec<Node>,
+    /// Field-1 nodes, in storage order, and their storage indices.
+    f1: Vec<Node>,
+    f1_index: Vec<u32>,
+    /// Dense map storage index → field-1 slot (u32::MAX when none); empty without cracks.
+    slot_of: Vec<u32>,
+    strip_bounds: Vec<usize>,
+    needs_sort: bool,
+    bcs: Vec<BcNodes>,
+    loads: Vec<LoadForce>,
+    damping: Damping,
+    dt: f64,
+    time: f64,
+    steps: u64,
+    total_steps: u64,
+    /// Active box [ix0, ix1, iy0, iy1] of the last P2G (inclusive).
+    active_box: [usize; 4],
+    active_nodes: usize,
+    m_tiny: f64,
+    /// Nodes lighter than this are left empty (NaN) in snapshots.
+    m_snapshot: f64,
+    // Energies.
+    kinetic: f64,
+    strain: f64,
+    external_work: f64,
+    dissipated: f64,
+    initial_total: f64,
+    energy_scale: f64,
+    work_abs: f64,
+    pool: std::sync::Arc<rayon::ThreadPool>,
+    load_now: Vec<[f64; 2]>,
+    threads: usize,
+    // Sort scratch.
+    sort_keys: Vec<u32>,
+    sort_count: Vec<u32>,
+    sort_perm: Vec<u32>,
+    scratch_kin: Vec<Kin>,
+    scratch_mech: Vec<Mech>,
+    scratch_stress: Vec<[f64; 4]>,
+    scratch_cold: Vec<Cold>,
+    col_sums: Vec<f64>,
+    cracks: Option<Box<Cracks>>,
 }
 
 impl Simulation {
     /// Build a simulation from a scene (validated here too).
-    pub fn new(scene: &Scene, _config: SolverConfig) -> Result<Simulation, BuildError> {
-        fracture_api::validate::validate(scene)?;
-        Ok(Simulation { scene: scene.clone() })
+    pub fn new(scene: &Scene, config: SolverConfig) -> Result<Simulation, BuildError> {
+        let size = fracture_api::validate::validate(scene)?;
+        let threads = if config.threads == 0 {
+            std::thread::available_parallelism().map_or(1, |n| n.get())
+        } else {
+            config.threads
+        };
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| BuildError::Threads(e.to_string()))?;
+        let g = &scene.grid;
+        let geom = GridGeom::new(g.min, g.max, g.cell_size);
+        let h = g.cell_size;
+        let analysis = if scene.analysis == Analysis::PlaneStress {
+            Analysis::PlaneStress
+        } else {
+            Analysis::PlaneStrain
+        };
+        let names: Vec<&String> = scene.materials.keys().collect();
+        let mats: Vec<Elastic> = scene
+            .materials
+            .values()
+            .map(|m| Elastic::new(m, analysis))
+            .collect();
+
+        // Particles on the lattice.
+        let mut parts = Particles::default();
+        let mut id = 0u32;
+        fracture_api::lattice::for_each_seed(scene, |s| {
+            let body = &scene.bodies[s.body as usize];
+            let mat = names
+                .iter()
+                .position(|n| **n == body.material)
+                .unwrap_or(0);
+            let sub = h / s.ppc as f64;
+            let vol = sub * sub * scene.thickness;
+            let load = scene
+                .loads
+                .iter()
+                .position(|l| l.region.contains(s.x))
+                .map_or(0, |i| i as u32 + 1);
+            parts.kin.push(Kin {
+                x: s.x,
+                v: body.initial_velocity,
+            });
+            parts.mech.push(Mech {
+                m: mats[mat].rho * vol,
+                vol,
+                lh: 0.5 / s.ppc as f64,
+                w: 0.0,
+                mat: mat as u32,
+                load,
+            });
+            parts.stress.push([0.0; 4]);
+            parts.cold.push(Cold {
+                x0: s.x,
+                grad_u: [0.0; 4],
+                id,
+                body: s.body,
+            });
+            parts.x_next.push(s.x);
+            id += 1;
+        });
+        let n = parts.len();
+        let m_min = parts.mech.iter().map(|m| m.m).fold(f64::INFINITY, f64::min);
+
+        // Boundary conditions resolved to nodes.
+        let bcs = scene
+            .boundary_conditions
+            .iter()
+            .map(|bc| {
+                let mut nodes = Vec::new();
+                for ix in 0..geom.nx {
+                    for iy in 0..geom.ny {
+                        if bc.region.contains(geom.node_pos(ix, iy)) {
+                            nodes.push(geom.index(ix, iy) as u32);
+                        }
+                    }
+                }
+                BcNodes {
+                    nodes,
+                    vx: bc.velocity.x,
+                    vy: bc.velocity.y,
+                    ramp: bc.ramp_time.unwrap_or(0.0),
+                    start: bc.start.unwrap_or(0.0),
+                    end: bc.end.unwrap_or(f64::INFINITY),
+                }
+            })
+            .collect();
+        let loads = scene
+            .loads
+            .iter()
+            .map(|l| LoadForce {
+                t: [
+                    l.traction[0] * scene.thickness,
+                    l.traction[1] * scene.thickness,
+                ],
+                ramp: l.ramp_time.unwrap_or(0.0),
+            })
+            .collect();
+
+        let c_max = mats.iter().map(|m| m.c_l).fold(0.0, f64::max);
+        let mass_total: f64 = parts.mech.iter().map(|m| m.m).sum();
+        let storage = geom.storage_len();
+        let mut sim = Simulation {
+            scene: scene.clone(),
+            geom,
+            shape: g.shape_function,
+            mats,
+            nodes: vec![Node::default(); storage],
+            f1: Vec::new(),
+            f1_index: Vec::new(),
+            slot_of: Vec::new(),
+            strip_bounds: vec![0; geom.strips + 1],
+            needs_sort: true,
+            bcs,
+            loads,
+            damping: scene.damping.clone(),
+            dt: size.time_step,
+            time: 0.0,
+            steps: 0,
+            total_steps: size.steps,
+            active_box: [0, 0, 0, 0],
+            active_nodes: 0,
+            // Gathers must use every node with mass: skipping light nodes breaks Σ∇S = 0 and
+            // strains a rigidly moving body.
+            m_tiny: f64::MIN_POSITIVE,
+            m_snapshot: 1e-9 * m_min,
+            kinetic: 0.0,
+            strain: 0.0,
+            external_work: 0.0,
+            dissipated: 0.0,
+            initial_total: 0.0,
+            energy_scale: 1e-12 * mass_total * c_max * c_max,
+            work_abs: 0.0,
+            pool: std::sync::Arc::new(pool),
+            load_now: vec![[0.0; 2]; scene.loads.len()],
+            threads,
+            sort_keys: vec![0; n],
+            sort_count: Vec::new(),
+            sort_perm: vec![0; n],
+            scratch_kin: vec![Kin::default(); n],
+            scratch_mech: vec![Mech::default(); n],
+            scratch_stress: vec![[0.0; 4]; n],
+            scratch_cold: vec![Cold::default(); n],
+            col_sums: vec![0.0; geom.cols],
+            parts,
+            cracks: None,
+        };
+        if !scene.cracks.is_empty() {
+            sim.slot_of = vec![u32::MAX; storage];
+            sim.parts.fmask = vec![0; n];
+            sim.cracks = Some(Box::new(Cracks::new(scene, &sim.geom, &sim.mats)));
+        }
+        sim.kinetic = sim.kinetic_energy();
+        sim.initial_total = sim.kinetic;
+        Ok(sim)
     }
+
+    /// Replace every particle's velocity by `f(x0)` of its initial position (an API for
+    /// initial conditions richer than the scene's uniform velocities, e.g. a vibration mode).
+    pub fn set_velocities(&mut self, f: impl Fn([f64; 2]) -> [f64; 2]) {
+        for (k, c) in self.parts.kin.iter_mut().zip(&self.parts.cold) {
+            k.v = f(c.x0);
+        }
+        self.kinetic = self.kinetic_energy();
+        self.initial_total = self.kinetic + self.strain + self.dissipated - self.external_work;
+    }
+
+    fn kinetic_energy(&self) -> f64 {
+        self.parts
+            .kin
+            .iter()
+            .zip(&self.parts.mech)
+            .map(|(k, m)| 0.5 * m.m * (k.v[0] * k.v[0] + k.v[1] * k.v[1]))
+            .sum()
+    }
+
+    /// Counting sort of the particles by cell (column-major), and the strip bounds.
+    fn sort_particles(&mut self) -> Result<(), StepError> {
+        let geom = self.geom;
+        let ncx = geom.nx - 1;
+        let ncy = geom.ny - 1;
+        let ncells = ncx * ncy;
+        for (i, k) in self.parts.kin.iter().enumerate() {
+            let (cx, cy) = geom.cell(k.x);
+            if cx < 1 || cy < 1 || cx as usize + 2 > ncx || cy as usize + 2 > ncy {
+                return Err(StepError::LeftGrid {
+                    step: self.steps,
+                    particle: self.parts.cold[i].id as usize,
+                    x: k.x[0],
+                    y: k.x[1],
+                });
+            }
+            self.sort_keys[i] = (cx as usize * ncy + cy as usize) as u32;
+        }
+        self.sort_count.clear();
+        self.sort_count.resize(ncells + 1, 0);
+        for &k in &self.sort_keys {
+            self.sort_count[k as usize + 1] += 1;
+        }
+        for c in 0..ncells {
+            self.sort_count[c + 1] += self.sort_count[c];
+        }
+        // Strip bounds: first particle with cell column ≥ s·STRIP.
+        for s in 0..=geom.strips {
+            let col = (s * STRIP).min(ncx);
+            self.strip_bounds[s] = self.sort_count[col * ncy] as usize;
+        }
+        for (i, &k) in self.sort_keys.iter().enumerate() {
+            let dst = &mut self.sort_count[k as usize];
+            self.sort_perm[i] = *dst;
+            *dst += 1;
+        }
+        let p = &mut self.parts;
+        for (i, &d) in self.sort_perm.iter().enumerate() {
+            let d = d as usize;
+            self.scratch_kin[d] = p.kin[i];
+            self.scratch_mech[d] = p.mech[i];
+            self.scratch_stress[d] = p.stress[i];
+            self.scratch_cold[d] = p.cold[i];
+        }
+        std::mem::swap(&mut p.kin, &mut self.scratch_kin);
+        std::mem::swap(&mut p.mech, &mut self.scratch_mech);
+        std::mem::swap(&mut p.stress, &mut self.scratch_stress);
+        std::mem::swap(&mut p.cold, &mut self.scratch_cold);
+        self.needs_sort = false;
+        Ok(())
+    }
+
     /// Advance one time step.
     pub fn step(&mut self) -> Result<StepStats, StepError> {
-        Ok(StepStats::default())
+        let pool = std::sync::Arc::clone(&self.pool);
+        pool.install(|| self.step_inner())
     }
+
+    fn step_inner(&mut self) -> Result<StepStats, StepError> {
+        if self.needs_sort {
+            self.sort_particles()?;
+        }
+        let dt = self.dt;
+        let t0 = self.time;
+        let t1 = t0 + dt;
+        self.reset_grid();
+        self.setup_fields()?;
+        for (l, out) in self.loads.iter().zip(self.load_now.iter_mut()) {
+            let r = if l.ramp > 0.0 {
+                (t0 / l.ramp).min(1.0)
+            } else {
+                1.0
+            };
+            *out = [l.t[0] * r, l.t[1] * r];
+        }
+
+        // Pass 1: P2G, then contact and boundary conditions on the momenta.
+        let acc = self.pass_p2g();
+        self.check(&acc)?;
+        self.set_active_box(&acc);
+        self.apply_bc_momentum(t0, false);
+        self.contact(Stage::Extrapolated);
+
+        // Pass 2: first stress half-update and forces; damping, BC force fix, contact.
+        let acc = self.pass_forces();
+        self.check(&acc)?;
+        self.grid_forces(t1);
+        self.contact(Stage::Forces);
+
+        // Pass 3: particle update and re-extrapolation; BCs and contact on the new momenta.
+        let acc = self.pass_update();
+        self.check(&acc)?;
+        self.kinetic = acc.e;
+        self.external_work += acc.w;
+        self.work_abs += acc.w.abs();
+        self.needs_sort |= acc.resort;
+        self.apply_bc_momentum(t1, true);
+        self.contact(Stage::Reextrapolated);
+
+        // Crack surfaces move with the grid velocities (§5).
+        if let Some(cr) = self.cracks.as_mut() {
+            cr.move_surfaces(&self.geom, &self.nodes, &self.f1, &self.slot_of, self.m_tiny, dt);
+        }
+
+        // Pass 4: second stress half-update; positions committed.
+        let acc = self.pass_strain_last();
+        self.check(&acc)?;
+        self.strain = acc.e;
+
+        self.time = t1;
+        self.steps += 1;
+
+        // Propagation (§7).
+        let grew = self.propagate()?;
+
+        // Energy blow-up: kinetic + strain far above everything ever put in.
+        let energy = self.kinetic + self.strain;
+        let reference = self.initial_total.abs() + self.work_abs + self.dissipated;
+        if !energy.is_finite() || energy > 10.0 * reference + self.energy_scale {
+            return Err(StepError::EnergyBlowUp {
+                step: self.steps,
+                energy,
+                reference,
+            });
+        }
+        Ok(StepStats {
+            grew,
+            active_nodes: self.active_nodes,
+        })
+    }
+
+    fn check(&self, acc: &Acc) -> Result<(), StepError> {
+        let Some((i, kind)) = acc.fail else {
+            return Ok(());
+        };
+        let k = self.parts.kin[i];
+        let particle = self.parts.cold[i].id as usize;
+        let step = self.steps + 1;
+        Err(match kind {
+            FAIL_GRID => StepError::LeftGrid {
+                step,
+                particle,
+                x: self.parts.x_next[i][0],
+                y: self.parts.x_next[i][1],
+            },
+            _ => StepError::NonFinite {
+                step,
+                particle,
+                quantity: match kind {
+                    FAIL_VELOCITY => "velocity",
+                    FAIL_POSITION => "position",
+                    _ => "stress",
+                },
+                x: k.x[0],
+                y: k.x[1],
+            },
+        })
+    }
+
+    /// Zero the grid where the last step wrote.
+    fn reset_grid(&mut self) {
+        let [x0, x1, y0, y1] = self.active_box;
+        if x1 >= x0 && self.active_nodes > 0 {
+            let ny = self.geom.ny;
+            let start = (x0 + PAD) * ny;
+            let end = (x1 + 1 + PAD) * ny;
+            self.nodes[start..end]
+                .par_chunks_mut(ny)
+                .for_each(|col| col[y0..=y1].fill(Node::default()));
+        }
+        for &i in &self.f1_index {
+            self.slot_of[i as usize] = u32::MAX;
+        }
+        self.f1.clear();
+        self.f1_index.clear();
+    }
+
+    /// Crack velocity fields of every particle–node pair and the field-1 node table.
+    fn setup_fields(&mut self) -> Result<(), StepError> {
+        let Some(cr) = self.cracks.as_mut() else {
+            return Ok(());
+        };
+        cr.assign_fields(
+            &self.geom,
+            self.shape,
+            &self.parts.kin,
+            &self.parts.mech,
+            &mut self.parts.fmask,
+            &mut self.f1_index,
+        )
+        .map_err(|(idx, fields)| {
+            let (ix, iy) = self.geom.node_of(idx);
+            let p = self.geom.node_pos(ix, iy);
+            StepError::TooManyFields {
+                step: self.steps + 1,
+                x: p[0],
+                y: p[1],
+                fields,
+                max: 2,
+            }
+        })?;
+        self.f1.resize(self.f1_index.len(), Node::default());
+        for (slot, &i) in self.f1_index.iter().enumerate() {
+            self.slot_of[i as usize] = slot as u32;
+        }
+        Ok(())
+    }
+
+    fn set_active_box(&mut self, acc: &Acc) {
+        if !acc.has_box {
+            self.active_nodes = 0;
+            return;
+        }
+        let g = self.geom;
+        let b = [
+            acc.bx[0].max(0) as usize,
+            (acc.bx[1] as usize).min(g.nx - 1),
+            acc.bx[2].max(0) as usize,
+            (acc.bx[3] as usize).min(g.ny - 1),
+        ];
+        self.active_box = b;
+        let ny = g.ny;
+        let m_tiny = self.m_tiny;
+        let cols = &self.nodes[(b[0] + PAD) * ny..(b[1] + 1 + PAD) * ny];
+        self.active_nodes = cols
+            .par_chunks(ny)
+            .map(|c| c[b[2]..=b[3]].iter().filter(|n| n.m > m_tiny).count())
+            .sum::<usize>()
+            + self.f1.len();
+    }
+
+    /// Velocity boundary conditions on the extrapolated (`reextrapolated == false`: p) or
+    /// re-extrapolated (q) momenta, on every field of each constrained node.
+    fn apply_bc_momentum(&mut self, t: f64, reextrapolated: bool) {
+        let m_tiny = self.m_tiny;
+        for bc in &self.bcs {
+            let v = bc.velocity(t);
+            if v[0].is_none() && v[1].is_none() {
+                continue;
+            }
+            for &i in &bc.nodes {
+                let i = i as usize;
+                let slot = self.slot_of.get(i).copied().unwrap_or(u32::MAX);
+                let apply = |n: &mut Node| {
+                    if n.m <= m_tiny {
+                        return;
+                    }
+                    let target = if reextrapolated { &mut n.q } else { &mut n.p };
+                    for k in 0..2 {
+                        if let Some(vk) = v[k] {
+                            target[k] = n.m * vk;
+                        }
+                    }
+                };
+                apply(&mut self.nodes[i]);
+                if slot != u32::MAX {
+                    apply(&mut self.f1[slot as usize]);
+                }
+            }
+        }
+    }
+
+    /// Damping and the boundary-condition force fix after the force pass.
+    fn grid_forces(&mut self, t1: f64) {
+        let dt = self.dt;
+        let m_tiny = self.m_tiny;
+        // Damping: a grid force against the motion (kinetic: local non-viscous; viscous:
+        // mass-proportional); the work it removes is recorded as dissipated.
+        let damp = self.damping.clone();
+        if !matches!(damp, Damping::None) {
+            let damp_node = move |n: &mut Node| -> f64 {
+                if n.m <= m_tiny {
+                    return 0.0;
+                }
+                let v = [n.p[0] / n.m, n.p[1] / n.m];
+                match damp {
+                    Damping::Viscous { coefficient } => {
+                        let fd = [coefficient * n.p[0], coefficient * n.p[1]];
+                        n.f[0] -= fd[0];
+                        n.f[1] -= fd[1];
+                        (fd[0] * v[0] + fd[1] * v[1]) * dt
+                    }
+                    Damping::Kinetic { coefficient } => {
+                        let mut d = 0.0;
+                        for k in 0..2 {
+                            let fd = coefficient * n.f[k].abs() * v[k].signum();
+                            n.f[k] -= fd;
+                            d += fd * v[k] * dt;
+                        }
+                        d
+                    }
+                    Damping::None => 0.0,
+                }
+            };
+            let [x0, x1, y0, y1] = self.active_box;
+            let ny = self.geom.ny;
+            let cols = &mut self.nodes[(x0 + PAD) * ny..(x1 + 1 + PAD) * ny];
+            let sums = &mut self.col_sums[..x1 + 1 - x0];
+            cols.par_chunks_mut(ny)
+                .zip(sums.par_iter_mut())
+                .for_each(|(c, s)| *s = c[y0..=y1].iter_mut().map(&damp_node).sum());
+            let mut d: f64 = sums.iter().sum();
+            for n in &mut self.f1 {
+                d += damp_node(n);
+            }
+            self.dissipated += d;
+        }
+        // Boundary conditions: fix the force so that p + Δt f meets the prescribed velocity;
+        // the reaction does work at the node's mid-step velocity.
+        let mut work = 0.0;
+        for bc in &self.bcs {
+            let v = bc.velocity(t1);
+            if v[0].is_none() && v[1].is_none() {
+                continue;
+            }
+            for &i in &bc.nodes {
+                let i = i as usize;
+                let slot = self.slot_of.get(i).copied().unwrap_or(u32::MAX);
+                let mut apply = |n: &mut Node| {
+                    if n.m <= m_tiny {
+                        return;
+                    }
+                    for k in 0..2 {
+                        if let Some(vk) = v[k] {
+                            let f_new = (n.m * vk - n.p[k]) / dt;
+                            let v_mid = 0.5 * (n.p[k] / n.m + vk);
+                            work += (f_new - n.f[k]) * v_mid * dt;
+                            n.f[k] = f_new;
+                        }
+                    }
+                };
+                apply(&mut self.nodes[i]);
+                if slot != u32::MAX {
+                    apply(&mut self.f1[slot as usize]);
+                }
+            }
+        }
+        self.external_work += work;
+        self.work_abs += work.abs();
+    }
+
+    fn contact(&mut self, stage: Stage) {
+        if let Some(cr) = self.cracks.as_mut() {
+            let d = cr.contact(stage, &mut self.nodes, &mut self.f1, &self.f1_index, self.m_tiny, self.dt);
+            self.dissipated += d;
+        }
+    }
+
+    fn propagate(&mut self) -> Result<bool, StepError> {
+        let Some(mut cr) = self.cracks.take() else {
+            return Ok(false);
+        };
+        let grew = cr.propagate(&self.view(), self.time);
+        self.cracks = Some(cr);
+        Ok(grew)
+    }
+
+    fn view(&self) -> crate::crack::View<'_> {
+        crate::crack::View {
+            geom: &self.geom,
+            shape: self.shape,
+            parts: &self.parts,
+            mats: &self.mats,
+            nodes: &self.nodes,
+            f1: &self.f1,
+            slot_of: &self.slot_of,
+            strip_bounds: &self.strip_bounds,
+        }
+    }
+}
+
+/// The momentum stage at which contact is applied (`algorithm.md` §4, pitfall 4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// After P2G (momentum p).
+    Extrapolated,
+    /// After the force update (p + Δt f; forces adjusted by ±Δp/Δt).
+    Forces,
+    /// After re-extrapolation (momentum q).
+    Reextrapolated,
+}
+
+/// Accumulate the stencil's contribution into the active box of `acc`.
+#[inline(always)]
+fn grow_box(acc: &mut Acc, w: &Weights2) {
+    let (bx, by) = (w.x.base as i64, w.y.base as i64);
+    if acc.has_box {
+        acc.bx[0] = acc.bx[0].min(bx);
+        acc.bx[1] = acc.bx[1].max(bx + 2);
+        acc.bx[2] = acc.bx[2].min(by);
+        acc.bx[3] = acc.bx[3].max(by + 2);
+    } else {
+        acc.bx = [bx, bx + 2, by, by + 2];
+        acc.has_box = true;
+    }
+}
+
+#[inline(always)]
+fn first_fail(acc: &mut Acc, i: usize, kind: u8) {
+    if acc.fail.is_none() {
+        acc.fail = Some((i, kind));
+    }
+}
+
+impl Simulation {
+    /// Run `f` on every strip (even colour, then odd) and merge the results in strip order.
+    fn strips<F>(&mut self, f: &F) -> Acc
+    where
+        F: Fn(usize, usize, PartsMut<'_>, GridMut<'_>) -> Acc + Sync,
+    {
+        let geom = self.geom;
+        let mut out = Acc::default();
+        for colour in 0..2 {
+            let grid = GridMut {
+                nodes: &mut self.nodes,
+                base: 0,
+                f1: &mut self.f1,
+                f1_index: &self.f1_index,
+                f1_base: 0,
+            };
+            let parts = PartsMut::new(&mut self.parts);
+            let bounds = &self.strip_bounds;
+            let a: Acc = for_strips(&geom, bounds, colour, parts, grid, &|s, p, g| {
+                f(s, bounds[s], p, g)
+            });
+            out = if colour == 0 { a } else { out.merge(a) };
+        }
+        out
+    }
+
+    /// Pass 1: P2G of mass, momentum and (with cracks) mass-weighted displacement.
+    fn pass_p2g(&mut self) -> Acc {
+        let geom = self.geom;
+        let shape = self.shape;
+        let cracks = self.cracks.is_some();
+        let slot_of = std::mem::take(&mut self.slot_of);
+        let acc = self.strips(&|_s, first, p, mut g| {
+            let mut acc = Acc::default();
+            for i in 0..p.len() {
+                let k = p.kin[i];
+                let m = p.mech[i].m;
+                let w = Weights2::new(shape, geom.xi(k.x), p.mech[i].lh);
+                grow_box(&mut acc, &w);
+                let (mask, disp) = if cracks {
+                    let x0 = p.cold[i].x0;
+                    (p.fmask[i], [k.x[0] - x0[0], k.x[1] - x0[1]])
+                } else {
+                    (0, [0.0; 2])
+                };
+                if !(k.v[0].is_finite() && k.v[1].is_finite()) {
+                    first_fail(&mut acc, first + i, FAIL_VELOCITY);
+                }
+                for a in 0..3 {
+                    let sx = w.x.s[a];
+                    if sx == 0.0 {
+                        continue;
+                    }
+                    let col = geom.index((w.x.base + a as i32) as usize, w.y.base as usize);
+                    for b in 0..3 {
+                        let s = sx * w.y.s[b];
+                        if s == 0.0 {
+                            continue;
+                        }
+                        let field = ((mask >> (3 * a + b)) & 1) as u8;
+                        let n = g.node(col + b, field, &slot_of);
+                        let sm = s * m;
+                        n.m += sm;
+                        n.p[0] += sm * k.v[0];
+                        n.p[1] += sm * k.v[1];
+                        if cracks {
+                            n.u[0] += sm * disp[0];
+                            n.u[1] += sm * disp[1];
+                        }
+                    }
+                }
+            }
+            acc
+        });
+        self.slot_of = slot_of;
+        acc
+    }
+
+    /// Pass 2: velocity gradient from p/m, first stress half-update, forces to the grid.
+    fn pass_forces(&mut self) -> Acc {
+        let geom = self.geom;
+        let shape = self.shape;
+        let m_tiny = self.m_tiny;
+        let half = 0.5 * self.dt;
+        let inv_h = 1.0 / geom.h;
+        let h = geom.h;
+        let slot_of = std::mem::take(&mut self.slot_of);
+        let mats = std::mem::take(&mut self.mats);
+        let loads = std::mem::take(&mut self.load_now);
+        let acc = self.strips(&|_s, first, p, mut g| {
+            let mut acc = Acc::default();
+            let has_mask = !p.fmask.is_empty();
+            for i in 0..p.len() {
+                let k = p.kin[i];
+                let mech = p.mech[i];
+                let w = Weights2::new(shape, geom.xi(k.x), mech.lh);
+                let mask = if has_mask { p.fmask[i] } else { 0 };
+                // L_ij = Σ_nodes v_i ∂S/∂x_j, each node giving its particle's field (pitfall 3).
+                let mut l = [[0.0; 2]; 2];
+                for a in 0..3 {
+                    let col = geom.index((w.x.base + a as i32) as usize, w.y.base as usize);
+                    for b in 0..3 {
+                        let gr = w.g(a, b);
+                        if gr[0] == 0.0 && gr[1] == 0.0 {
+                            continue;
+                        }
+                        let field = ((mask >> (3 * a + b)) & 1) as u8;
+                        let n = g.node(col + b, field, &slot_of);
+                        if n.m > m_tiny {
+                            let v = [n.p[0] / n.m, n.p[1] / n.m];
+                            l[0][0] += v[0] * gr[0];
+                            l[0][1] += v[0] * gr[1];
+                            l[1][0] += v[1] * gr[0];
+                            l[1][1] += v[1] * gr[1];
+                        }
+                    }
+                }
+                for r in &mut l {
+                    r[0] *= inv_h;
+                    r[1] *= inv_h;
+                }
+                let mat = &mats[mech.mat as usize];
+                let dw = mat.update(&mut p.stress[i], l, half);
+                p.mech[i].w += dw;
+                let gu = &mut p.cold[i].grad_u;
+                gu[0] += l[0][0] * half;
+                gu[1] += l[0][1] * half;
+                gu[2] += l[1][0] * half;
+                gu[3] += l[1][1] * half;
+                let s = p.stress[i];
+                if !(s[0].is_finite() && s[1].is_finite() && s[2].is_finite()) {
+                    first_fail(&mut acc, first + i, FAIL_STRESS);
+                }
+                // External force: traction × edge length (2l = h/ppc) × thickness.
+                let fext = if mech.load > 0 {
+                    let t = loads[mech.load as usize - 1];
+                    let edge = 2.0 * mech.lh * h;
+                    [t[0] * edge, t[1] * edge]
+                } else {
+                    [0.0; 2]
+                };
+                let vs = mech.vol * inv_h;
+                for a in 0..3 {
+                    let col = geom.index((w.x.base + a as i32) as usize, w.y.base as usize);
+                    for b in 0..3 {
+                        let sh = w.s(a, b);
+                        if sh == 0.0 {
+                            continue;
+                        }
+                        let gr = w.g(a, b);
+                        let field = ((mask >> (3 * a + b)) & 1) as u8;
+                        let n = g.node(col + b, field, &slot_of);
+                        n.f[0] += -vs * (s[0] * gr[0] + s[2] * gr[1]) + sh * fext[0];
+                        n.f[1] += -vs * (s[2] * gr[0] + s[1] * gr[1]) + sh * fext[1];
+                    }
+                }
+            }
+            acc
+        });
+        self.slot_of = slot_of;
+        self.mats = mats;
+        self.load_now = loads;
+        acc
+    }
+
+    /// Pass 3: FLIP particle update and re-extrapolation of the new momenta with the same
+    /// weights and fields.
+    fn pass_update(&mut self) -> Acc {
+        let geom = self.geom;
+        let shape = self.shape;
+        let m_tiny = self.m_tiny;
+        let dt = self.dt;
+        let h = geom.h;
+        let slot_of = std::mem::take(&mut self.slot_of);
+        let loads = std::mem::take(&mut self.load_now);
+        let (ncx, ncy) = ((geom.nx - 1) as i64, (geom.ny - 1) as i64);
+        let acc = self.strips(&|s, first, p, mut g| {
+            let mut acc = Acc::default();
+            let has_mask = !p.fmask.is_empty();
+            let lo = (s * STRIP) as i64 - 1;
+            let hi = ((s + 1) * STRIP) as i64;
+            for i in 0..p.len() {
+                let k = p.kin[i];
+                let mech = p.mech[i];
+                let w = Weights2::new(shape, geom.xi(k.x), mech.lh);
+                let mask = if has_mask { p.fmask[i] } else { 0 };
+                let mut acc_p = [0.0; 2];
+                let mut vbar = [0.0; 2];
+                for a in 0..3 {
+                    let col = geom.index((w.x.base + a as i32) as usize, w.y.base as usize);
+                    for b in 0..3 {
+                        let sh = w.s(a, b);
+                        if sh == 0.0 {
+                            continue;
+                        }
+                        let field = ((mask >> (3 * a + b)) & 1) as u8;
+                        let n = g.node(col + b, field, &slot_of);
+                        if n.m > m_tiny {
+                            let inv = 1.0 / n.m;
+                            for c in 0..2 {
+                                let an = n.f[c] * inv;
+                                acc_p[c] += sh * an;
+                                // (v_old + v_new)/2 = p/m + Δt/2 · f/m
+                                vbar[c] += sh * (n.p[c] * inv + 0.5 * dt * an);
+                            }
+                        }
+                    }
+                }
+                let v_old = k.v;
+                let v = [v_old[0] + dt * acc_p[0], v_old[1] + dt * acc_p[1]];
+                let xn = [k.x[0] + dt * vbar[0], k.x[1] + dt * vbar[1]];
+                if !(v[0].is_finite() && v[1].is_finite()) {
+                    first_fail(&mut acc, first + i, FAIL_VELOCITY);
+                } else if !(xn[0].is_finite() && xn[1].is_finite()) {
+                    first_fail(&mut acc, first + i, FAIL_POSITION);
+                } else {
+                    let (cx, cy) = geom.cell(xn);
+                    if cx < 1 || cy < 1 || cx + 1 >= ncx || cy + 1 >= ncy {
+                        first_fail(&mut acc, first + i, FAIL_GRID);
+                    }
+                    if cx < lo || cx > hi {
+                        acc.resort = true;
+                    }
+                }
+                p.kin[i].v = v;
+                p.x_next[i] = xn;
+                acc.e += 0.5 * mech.m * (v[0] * v[0] + v[1] * v[1]);
+                if mech.load > 0 {
+                    let t = loads[mech.load as usize - 1];
+                    let edge = 2.0 * mech.lh * h;
+                    acc.w += edge
+                        * (t[0] * 0.5 * (v_old[0] + v[0]) + t[1] * 0.5 * (v_old[1] + v[1]))
+                        * dt;
+                }
+                // Re-extrapolate momentum with the same weights and fields (pitfall 2).
+                for a in 0..3 {
+                    let col = geom.index((w.x.base + a as i32) as usize, w.y.base as usize);
+                    for b in 0..3 {
+                        let sh = w.s(a, b);
+                        if sh == 0.0 {
+                            continue;
+                        }
+                        let field = ((mask >> (3 * a + b)) & 1) as u8;
+                        let n = g.node(col + b, field, &slot_of);
+                        let sm = sh * mech.m;
+                        n.q[0] += sm * v[0];
+                        n.q[1] += sm * v[1];
+                    }
+                }
+            }
+            acc
+        });
+        self.slot_of = slot_of;
+        self.load_now = loads;
+        acc
+    }
+
+    /// Pass 4: velocity gradient from the re-extrapolated momenta, second stress half-update,
+    /// positions committed, strain energy summed.
+    fn pass_strain_last(&mut self) -> Acc {
+        let geom = self.geom;
+        let shape = self.shape;
+        let m_tiny = self.m_tiny;
+        let half = 0.5 * self.dt;
+        let inv_h = 1.0 / geom.h;
+        let slot_of = std::mem::take(&mut self.slot_of);
+        let mats = std::mem::take(&mut self.mats);
+        let acc = self.strips(&|_s, first, p, mut g| {
+            let mut acc = Acc::default();
+            let has_mask = !p.fmask.is_empty();
+            for i in 0..p.len() {
+                let k = p.kin[i];
+                let mech = p.mech[i];
+                let w = Weights2::new(shape, geom.xi(k.x), mech.lh);
+                let mask = if has_mask { p.fmask[i] } else { 0 };
+                let mut l = [[0.0; 2]; 2];
+                for a in 0..3 {
+                    let col = geom.index((w.x.base + a as i32) as usize, w.y.base as usize);
+                    for b in 0..3 {
+                        let gr = w.g(a, b);
+                        if gr[0] == 0.0 && gr[1] == 0.0 {
+                            continue;
+                        }
+                        let field = ((mask >> (3 * a + b)) & 1) as u8;
+                        let n = g.node(col + b, field, &slot_of);
+                        if n.m > m_tiny {
+                            let v = [n.q[0] / n.m, n.q[1] / n.m];
+                            l[0][0] += v[0] * gr[0];
+                            l[0][1] += v[0] * gr[1];
+                            l[1][0] += v[1] * gr[0];
+                            l[1][1] += v[1] * gr[1];
+                        }
+                    }
+                }
+                for r in &mut l {
+                    r[0] *= inv_h;
+                    r[1] *= inv_h;
+                }
+                let dw = mats[mech.mat as usize].update(&mut p.stress[i], l, half);
+                let wnew = mech.w + dw;
+                p.mech[i].w = wnew;
+                let gu = &mut p.cold[i].grad_u;
+                gu[0] += l[0][0] * half;
+                gu[1] += l[0][1] * half;
+                gu[2] += l[1][0] * half;
+                gu[3] += l[1][1] * half;
+                let s = p.stress[i];
+                if !(s[0].is_finite() && s[1].is_finite() && s[2].is_finite()) {
+                    first_fail(&mut acc, first + i, FAIL_STRESS);
+                }
+                acc.e += mech.vol * wnew;
+                p.kin[i].x = p.x_next[i];
+            }
+            acc
+        });
+        self.slot_of = slot_of;
+        self.mats = mats;
+        acc
+    }
+}
+
+/// Read-only views.
+impl Simulation {
     /// The scene.
     pub fn scene(&self) -> &Scene {
         &self.scene
     }
     /// Simulated time (s).
     pub fn time(&self) -> f64 {
-        0.0
+        self.time
     }
     /// Steps taken.
     pub fn steps_taken(&self) -> u64 {
-        0
+        self.steps
     }
     /// Δt (s).
     pub fn time_step(&self) -> f64 {
-        0.0
+        self.dt
     }
     /// End time (s).
     pub fn end_time(&self) -> f64 {
@@ -123,48 +1176,162 @@ impl Simulation {
     }
     /// Steps to reach the end time.
     pub fn total_steps(&self) -> u64 {
-        0
+        self.total_steps
     }
     /// Whether the end time is reached.
     pub fn is_finished(&self) -> bool {
-        true
+        self.steps >= self.total_steps
     }
     /// Number of particles.
     pub fn particle_count(&self) -> usize {
-        0
+        self.parts.len()
     }
     /// Nodes of the grid box.
     pub fn grid_node_count(&self) -> usize {
-        0
+        self.geom.nx * self.geom.ny
     }
-    /// Nodes touched by particles in the last step.
+    /// Nodes (and extra crack fields) touched by particles in the last step.
     pub fn active_node_count(&self) -> usize {
-        0
+        self.active_nodes
     }
     /// Threads in use.
     pub fn threads(&self) -> usize {
-        1
+        self.threads
     }
-    /// Energies now.
+    /// Grid geometry.
+    pub fn grid(&self) -> &GridGeom {
+        &self.geom
+    }
+    /// The particles (sorted by cell; `cold[i].id` is the creation index).
+    pub fn particles(&self) -> &Particles {
+        &self.parts
+    }
+
+    /// Energies now (J per the scene's thickness).
     pub fn energy(&self) -> EnergyRow {
-        EnergyRow::default()
+        EnergyRow {
+            time: self.time,
+            kinetic: self.kinetic,
+            strain: self.strain,
+            external_work: self.external_work,
+            dissipated: self.dissipated,
+            total_error: self.kinetic + self.strain + self.dissipated
+                - self.external_work
+                - self.initial_total,
+        }
     }
-    /// One row per crack tip now (computes J and K).
+
+    /// One row per crack tip now (J and K computed here, on demand).
     pub fn crack_tips(&mut self) -> Vec<CrackTipRow> {
-        Vec::new()
+        let Some(mut cr) = self.cracks.take() else {
+            return Vec::new();
+        };
+        let rows = cr.tip_rows(&self.view(), self.time);
+        self.cracks = Some(cr);
+        rows
     }
-    /// Node-sampled fields now.
+
+    /// The cracks, if the scene has any.
+    pub fn cracks(&self) -> Option<&Cracks> {
+        self.cracks.as_deref()
+    }
+
+    /// Fields sampled at the grid nodes now: mass-weighted averages of particle values
+    /// (NaN where no particle reaches a node).
     pub fn snapshot(&self, index: u32, fields: &[FieldKind]) -> Snapshot {
+        let g = self.geom;
+        let mut names: Vec<&'static str> = Vec::new();
+        for f in fields {
+            for c in field_components(*f) {
+                if !names.contains(c) {
+                    names.push(c);
+                }
+            }
+        }
+        let nn = g.nx * g.ny;
+        let nc = names.len();
+        let mut mass = vec![0.0f64; nn];
+        let mut acc = vec![0.0f64; nn * nc];
+        let thickness = self.scene.thickness;
+        let fringe_c = self.scene.output.fringe_constant.unwrap_or(f64::NAN);
+        let p = &self.parts;
+        let mut vals = vec![0.0f64; nc];
+        for i in 0..p.len() {
+            let k = p.kin[i];
+            let s = p.stress[i];
+            let gu = p.cold[i].grad_u;
+            for (c, name) in names.iter().enumerate() {
+                vals[c] = match *name {
+                    "sxx" => s[0],
+                    "syy" => s[1],
+                    "sxy" => s[2],
+                    "exx" => gu[0],
+                    "eyy" => gu[3],
+                    "exy" => 0.5 * (gu[1] + gu[2]),
+                    "vx" => k.v[0],
+                    "vy" => k.v[1],
+                    "speed" => k.v[0].hypot(k.v[1]),
+                    "ux" => k.x[0] - p.cold[i].x0[0],
+                    "uy" => k.x[1] - p.cold[i].x0[1],
+                    // N = h(σ1 − σ2)/f_σ, σ1 − σ2 = 2·sqrt(((σxx − σyy)/2)² + σxy²).
+                    "fringe" => {
+                        thickness * 2.0 * (0.5 * (s[0] - s[1])).hypot(s[2]) / fringe_c
+                    }
+                    "material" => p.mech[i].mat as f64,
+                    _ => 0.0,
+                };
+            }
+            let w = Weights2::new(self.shape, g.xi(k.x), p.mech[i].lh);
+            for a in 0..3 {
+                for b in 0..3 {
+                    let sh = w.s(a, b);
+                    if sh == 0.0 {
+                        continue;
+                    }
+                    let ix = (w.x.base + a as i32) as usize;
+                    let iy = (w.y.base + b as i32) as usize;
+                    if ix >= g.nx || iy >= g.ny {
+                        continue;
+                    }
+                    let n = iy * g.nx + ix;
+                    let sm = sh * p.mech[i].m;
+                    mass[n] += sm;
+                    for c in 0..nc {
+                        acc[n * nc + c] += sm * vals[c];
+                    }
+                }
+            }
+        }
+        let components = names
+            .iter()
+            .enumerate()
+            .map(|(c, name)| FieldComponent {
+                name: (*name).to_string(),
+                values: (0..nn)
+                    .map(|n| {
+                        if mass[n] > self.m_snapshot {
+                            (acc[n * nc + c] / mass[n]) as f32
+                        } else {
+                            f32::NAN
+                        }
+                    })
+                    .collect(),
+            })
+            .collect();
         Snapshot {
             index,
-            time: 0.0,
-            nx: 0,
-            ny: 0,
-            origin: [0.0; 2],
-            cell_size: 0.0,
+            time: self.time,
+            nx: g.nx as u32,
+            ny: g.ny as u32,
+            origin: g.origin,
+            cell_size: g.h,
             fields: fields.iter().map(|f| f.name().to_string()).collect(),
-            components: Vec::new(),
-            cracks: Vec::new(),
+            components,
+            cracks: self
+                .cracks
+                .as_ref()
+                .map(|c| c.lines())
+                .unwrap_or_default(),
         }
     }
 }

@@ -1,2 +1,97 @@
 //! Runs scenes: drives the solver, samples histories, renders snapshots, writes the run
 //! directory (local runs) or streams to the server (jobs).
+//!
+//! * [`run_scene`] is the run loop: it builds a [`Simulation`](fracture_solver::Simulation),
+//!   steps it to the end time, samples energies and crack tips every
+//!   `output.history_interval`, takes field snapshots every `output.snapshot_interval`,
+//!   and hands everything to a [`RunSink`] in batches. It never panics: a panic inside the
+//!   solver becomes a failed [`Summary`].
+//! * [`LocalOutput`] is the sink of `fracture run`: the files of `run-output.md`.
+//! * [`mcapfile`] writes and reads the `fields.mcap` file (also used by the server).
+
+pub mod local;
+pub mod mcapfile;
+mod run;
+
+pub use local::{LocalOutput, LocalOutputError};
+pub use run::run_scene;
+
+use std::time::Duration;
+
+use fracture_api::results::{CrackTipRow, EnergyRow, Progress, Snapshot, Summary};
+
+/// What the sink wants the run to do next.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Control {
+    /// Keep running.
+    Continue,
+    /// Stop now; the run ends with status `cancelled`.
+    Cancel,
+}
+
+/// A sink could not take the results (IO error, server gone, lease lost, …). The run ends
+/// `failed` with this message.
+#[derive(Debug, Clone, PartialEq, Eq, thiserror::Error)]
+#[error("{0}")]
+pub struct SinkError(pub String);
+
+impl From<std::io::Error> for SinkError {
+    fn from(e: std::io::Error) -> Self {
+        SinkError(e.to_string())
+    }
+}
+
+/// Where a run's results go. Calls come in this order: rows and snapshots as they are
+/// produced (rows in batches), `progress` about every [`RunOptions::flush_every`] of wall
+/// time (rows sampled so far are flushed just before it), a last `progress`, then `finish`.
+pub trait RunSink {
+    /// Progress report; return [`Control::Cancel`] to stop the run. Called about every
+    /// [`RunOptions::flush_every`] of wall time and once at the end (where the answer is
+    /// ignored).
+    fn progress(&mut self, p: &Progress) -> Result<Control, SinkError>;
+    /// A batch of energy samples, in time order.
+    fn energy(&mut self, rows: &[EnergyRow]) -> Result<(), SinkError>;
+    /// A batch of crack-tip samples, in time order (one row per tip per sample).
+    fn crack_tips(&mut self, rows: &[CrackTipRow]) -> Result<(), SinkError>;
+    /// One field snapshot.
+    fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError>;
+    /// The run is over; called exactly once, also after failures and cancellation.
+    fn finish(&mut self, summary: &Summary) -> Result<(), SinkError>;
+}
+
+/// How a run is driven (not physics).
+#[derive(Debug, Clone, PartialEq, Eq)]
+pub struct RunOptions {
+    /// Solver threads; 0 = one per core.
+    pub threads: usize,
+    /// Wall-clock interval between progress reports (and row flushes).
+    pub flush_every: Duration,
+}
+
+impl Default for RunOptions {
+    fn default() -> Self {
+        RunOptions {
+            threads: 0,
+            flush_every: Duration::from_millis(500),
+        }
+    }
+}
+
+/// Forwarding impl, so a `&mut S` or a boxed sink can be passed where a sink is owned.
+impl<S: RunSink + ?Sized> RunSink for &mut S {
+    fn progress(&mut self, p: &Progress) -> Result<Control, SinkError> {
+        (**self).progress(p)
+    }
+    fn energy(&mut self, rows: &[EnergyRow]) -> Result<(), SinkError> {
+        (**self).energy(rows)
+    }
+    fn crack_tips(&mut self, rows: &[CrackTipRow]) -> Result<(), SinkError> {
+        (**self).crack_tips(rows)
+    }
+    fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError> {
+        (**self).snapshot(snap)
+    }
+    fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
+        (**self).finish(summary)
+    }
+}

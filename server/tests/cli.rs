@@ -1,0 +1,337 @@
+//! The `fracture` binary's local commands (`api.md`, command line; `run-output.md`):
+//! invalid scenes exit 2 naming the JSON path, `run` writes the four files with the exact
+//! headers, `validate` prints the size, `schema` prints JSON, `bench` runs CI-sized.
+#![allow(clippy::unwrap_used, missing_docs)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use serde_json::{Value, json};
+
+fn fracture(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fracture"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+fn stderr(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stderr).into_owned()
+}
+
+fn stdout(o: &Output) -> String {
+    String::from_utf8_lossy(&o.stdout).into_owned()
+}
+
+fn scenes() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
+}
+
+/// A tiny valid scene: 8 mm × 8 mm plate, 1 mm cells, a few steps.
+fn tiny() -> Value {
+    json!({
+        "name": "tiny",
+        "grid": {"cell_size": 0.001, "min": [0.0, 0.0], "max": [0.01, 0.01]},
+        "materials": {"plate": {"model": "linear_elastic", "density": 1230.0,
+                                "youngs_modulus": 5.2e9, "poissons_ratio": 0.34}},
+        "bodies": [{"material": "plate",
+                    "region": {"rectangle": {"min": [0.002, 0.002], "max": [0.008, 0.008]}},
+                    "initial_velocity": [1.0, 0.0]}],
+        "time": {"end": 2.0e-6},
+        "output": {"snapshot_interval": 1.0e-6}
+    })
+}
+
+fn write(dir: &Path, name: &str, text: &str) -> PathBuf {
+    let p = dir.join(name);
+    std::fs::write(&p, text).unwrap();
+    p
+}
+
+/// Run `validate` and `run` on a broken scene: both exit 2 and name `path` (and `value`).
+fn assert_invalid(text: &str, path: &str, value: &str) {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(dir.path(), "scene.json", text);
+    let f = file.to_str().unwrap();
+    for args in [
+        vec!["validate", f],
+        vec!["run", f, "--out", dir.path().join("out").to_str().unwrap()],
+    ] {
+        let o = fracture(&args);
+        let err = stderr(&o);
+        assert_eq!(o.status.code(), Some(2), "{args:?}: {err}");
+        assert!(
+            err.contains(path),
+            "{args:?}: stderr does not name {path}: {err}"
+        );
+        assert!(
+            err.contains(value),
+            "{args:?}: stderr does not show {value}: {err}"
+        );
+    }
+}
+
+fn with(f: impl FnOnce(&mut Value)) -> String {
+    let mut s = tiny();
+    f(&mut s);
+    s.to_string()
+}
+
+#[test]
+fn poissons_ratio_out_of_range_is_named() {
+    let text = with(|s| s["materials"]["plate"]["poissons_ratio"] = json!(0.7));
+    assert_invalid(
+        &text,
+        "materials.plate.poissons_ratio: 0.7 is outside (-1, 0.5)",
+        "0.7",
+    );
+}
+
+#[test]
+fn bad_constants_are_named() {
+    let text = with(|s| {
+        s["materials"]["plate"]["youngs_modulus"] = json!(-1.0);
+        s["materials"]["plate"]["density"] = json!(0.0);
+    });
+    assert_invalid(&text, "materials.plate.youngs_modulus", "-1");
+    assert_invalid(&text, "materials.plate.density", "0");
+}
+
+#[test]
+fn body_outside_the_grid_is_named() {
+    let text = with(|s| s["bodies"][0]["region"]["rectangle"]["max"] = json!([0.02, 0.008]));
+    assert_invalid(&text, "bodies.0.region", "0.02");
+}
+
+#[test]
+fn empty_body_is_named() {
+    // A disc smaller than a sub-cell, between particle centres: no particle.
+    let text = with(|s| {
+        s["bodies"][0]["region"] = json!({"circle": {"center": [0.005, 0.005], "radius": 1.0e-5}})
+    });
+    assert_invalid(&text, "bodies.0.region", "no particle");
+}
+
+#[test]
+fn cfl_out_of_range_is_named() {
+    let text = with(|s| s["time"]["cfl"] = json!(1.5));
+    assert_invalid(&text, "time.cfl", "1.5");
+}
+
+#[test]
+fn negative_time_is_named() {
+    let text = with(|s| s["time"]["end"] = json!(-1.0e-6));
+    assert_invalid(&text, "time.end", "-1e-6");
+}
+
+#[test]
+fn unknown_material_is_named() {
+    let text = with(|s| s["bodies"][0]["material"] = json!("steel"));
+    assert_invalid(&text, "bodies.0.material", "steel");
+}
+
+#[test]
+fn unknown_field_is_named() {
+    let text = with(|s| s["grid"]["cellsize"] = json!(0.001));
+    assert_invalid(&text, "grid", "cellsize");
+    let text = with(|s| s["output"]["fields"] = json!(["stress", "temperature"]));
+    assert_invalid(&text, "output.fields", "temperature");
+}
+
+#[test]
+fn malformed_json_is_reported() {
+    let text = tiny().to_string();
+    let cut = &text[..text.len() - 10];
+    assert_invalid(cut, "scene.json", "EOF");
+    assert_invalid("{\"name\": \"x\",, }", "scene.json", "line 1");
+}
+
+#[test]
+fn missing_file_exits_2() {
+    let o = fracture(&["validate", "/nonexistent/scene.json"]);
+    assert_eq!(o.status.code(), Some(2));
+    assert!(stderr(&o).contains("/nonexistent/scene.json"));
+}
+
+#[test]
+fn validate_prints_the_size() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(dir.path(), "scene.json", &tiny().to_string());
+    let o = fracture(&["validate", file.to_str().unwrap()]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let out = stdout(&o);
+    // 6 mm × 6 mm at 1 mm cells, 2 × 2 per cell; 11 × 11 nodes.
+    assert!(out.contains("particles: 144"), "{out}");
+    assert!(out.contains("grid nodes: 121"), "{out}");
+    let size = fracture_api::validate::validate(
+        &fracture_api::validate::parse_scene(&tiny().to_string()).unwrap(),
+    )
+    .unwrap();
+    assert!(out.contains(&format!("steps: {}", size.steps)), "{out}");
+    assert!(
+        out.contains(&format!("time step: {:e} s", size.time_step)),
+        "{out}"
+    );
+}
+
+#[test]
+fn example_scenes_are_valid() {
+    let mut n = 0;
+    for entry in std::fs::read_dir(scenes()).unwrap() {
+        let path = entry.unwrap().path();
+        if path.extension().and_then(|e| e.to_str()) != Some("json") {
+            continue;
+        }
+        let o = fracture(&["validate", path.to_str().unwrap()]);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}: {}",
+            path.display(),
+            stderr(&o)
+        );
+        n += 1;
+    }
+    assert!(n >= 2, "scenes/ holds {n} scenes");
+}
+
+#[test]
+fn schema_prints_the_scene_schema() {
+    let o = fracture(&["schema"]);
+    assert_eq!(o.status.code(), Some(0));
+    let v: Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v, fracture_api::Scene::json_schema());
+    for key in ["grid", "materials", "bodies", "time", "output"] {
+        assert!(v["properties"].get(key).is_some(), "schema lacks {key}");
+    }
+}
+
+#[test]
+fn run_writes_the_four_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(dir.path(), "scene.json", &tiny().to_string());
+    let out = dir.path().join("out");
+    let o = fracture(&[
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--threads",
+        "1",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    // Not a terminal: no progress bar drawn.
+    assert!(!stderr(&o).contains("steps,"), "{}", stderr(&o));
+    for f in [
+        "summary.json",
+        "energy.csv",
+        "crack_tips.csv",
+        "fields.mcap",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let energy = std::fs::read_to_string(out.join("energy.csv")).unwrap();
+    let mut lines = energy.lines();
+    assert_eq!(
+        lines.next(),
+        Some("time,kinetic,strain,external_work,dissipated,total_error")
+    );
+    let rows: Vec<&str> = lines.collect();
+    assert!(!rows.is_empty());
+    assert!(rows.iter().all(|l| l.split(',').count() == 6));
+    let tips = std::fs::read_to_string(out.join("crack_tips.csv")).unwrap();
+    assert_eq!(
+        tips,
+        "time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing\n"
+    );
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "completed");
+    assert_eq!(summary["particles"], 144);
+    assert_eq!(summary["threads"], 1);
+    let scene = fracture_api::validate::parse_scene(&tiny().to_string()).unwrap();
+    assert_eq!(summary["scene_hash"], scene.hash());
+    let size = fracture_api::validate::validate(&scene).unwrap();
+    assert_eq!(summary["steps"], size.steps);
+    // One row per step (no history_interval) and t = 0.
+    assert_eq!(rows.len() as u64, size.steps + 1);
+    let snaps = fracture_worker::mcapfile::read_snapshots(out.join("fields.mcap")).unwrap();
+    assert_eq!(snaps.len(), 3, "t = 0, 1 µs, 2 µs");
+}
+
+#[test]
+fn impact_bar_runs() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("out");
+    let scene = scenes().join("impact-bar.json");
+    let o = fracture(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stdout(&o).contains("completed"));
+}
+
+#[test]
+fn numerical_failure_exits_3_and_keeps_partial_results() {
+    // A body flying at 100 km/s leaves the grid within a few steps; the solver stops it
+    // with a diagnosis naming the step and where.
+    let text = with(|s| {
+        s["bodies"][0]["initial_velocity"] = json!([1.0e5, 0.0]);
+        s["time"]["end"] = json!(1.0e-4);
+    });
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(dir.path(), "scene.json", &text);
+    let out = dir.path().join("out");
+    let o = fracture(&[
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    let err = stderr(&o);
+    assert_eq!(o.status.code(), Some(3), "{err}");
+    assert!(err.contains("step"), "{err}");
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "failed");
+    assert!(summary["message"].as_str().unwrap().contains("step"));
+    let energy = std::fs::read_to_string(out.join("energy.csv")).unwrap();
+    assert!(energy.lines().count() >= 2, "partial rows kept: {energy}");
+}
+
+#[test]
+fn bench_runs_ci_sized() {
+    let o = fracture(&[
+        "bench",
+        "--cell-size",
+        "0.005",
+        "--steps",
+        "3",
+        "--warmup",
+        "1",
+        "--threads",
+        "1",
+        "--json",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: Value = serde_json::from_str(&stdout(&o)).unwrap();
+    assert_eq!(v["benchmark"], "throughput");
+    assert_eq!(v["steps"], 3);
+    assert_eq!(v["threads"], 1);
+    // 125 mm × 250 mm at 5 mm cells, 2 × 2 per cell: 25 × 50 × 4.
+    assert_eq!(v["particles"], 5000);
+    assert!(v["particle_steps_per_second"].as_f64().unwrap() > 0.0);
+    let o = fracture(&[
+        "bench",
+        "throughput",
+        "--cell-size",
+        "0.005",
+        "--steps",
+        "2",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stdout(&o).contains("particle-steps/s"));
+}

@@ -1,0 +1,226 @@
+//! The background grid: packed per-node data, the extra crack velocity field stored only at
+//! the nodes that need it, and the strip-coloured parallel traversal.
+//!
+//! Layout: node (ix, iy) lives at storage index `(ix + PAD)·ny + iy` (x-major, so a strip of
+//! columns is one contiguous slice). Particles are sorted by cell column and grouped in strips
+//! of `STRIP` columns. A particle whose cell column lies within two columns of its strip
+//! writes only to nodes in storage columns `[s·STRIP, s·STRIP + STRIP + 7)`; strips of the
+//! same colour (parity) are `2·STRIP` apart, so their writes never overlap. The scatter runs
+//! the even strips in parallel, then the odd strips: every node receives its contributions in
+//! the same order whatever the number of threads, so results are bitwise reproducible.
+
+use crate::particles::PartsMut;
+
+/// Cell columns per strip.
+pub const STRIP: usize = 8;
+/// Ghost columns on the left of the storage so write ranges never start below zero.
+pub const PAD: usize = 3;
+
+/// Data of one velocity field at one node.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Node {
+    /// Mass.
+    pub m: f64,
+    /// Momentum after extrapolation (and boundary conditions).
+    pub p: [f64; 2],
+    /// Force (internal + external, boundary-condition and contact corrected).
+    pub f: [f64; 2],
+    /// Momentum re-extrapolated from the updated particle velocities.
+    pub q: [f64; 2],
+    /// Mass-weighted particle displacement Σ S m (x − X), for crack contact.
+    pub u: [f64; 2],
+}
+
+/// Geometry of the grid.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct GridGeom {
+    /// Position of node (0, 0).
+    pub origin: [f64; 2],
+    /// Cell size h.
+    pub h: f64,
+    /// Nodes in x.
+    pub nx: usize,
+    /// Nodes in y.
+    pub ny: usize,
+    /// Number of particle strips.
+    pub strips: usize,
+    /// Storage columns (≥ nx + 2·PAD, whole colour chunks).
+    pub cols: usize,
+}
+
+impl GridGeom {
+    /// Geometry for the box `[min, max]` with cell `h`.
+    pub fn new(min: [f64; 2], max: [f64; 2], h: f64) -> Self {
+        let nx = ((max[0] - min[0]) / h - 1e-9).ceil() as usize + 1;
+        let ny = ((max[1] - min[1]) / h - 1e-9).ceil() as usize + 1;
+        let strips = (nx - 1).div_ceil(STRIP).max(1);
+        let cols = 2 * STRIP * (strips.div_ceil(2) + 1) + STRIP;
+        GridGeom {
+            origin: min,
+            h,
+            nx,
+            ny,
+            strips,
+            cols,
+        }
+    }
+    /// Storage index of node (ix, iy).
+    #[inline(always)]
+    pub fn index(&self, ix: usize, iy: usize) -> usize {
+        (ix + PAD) * self.ny + iy
+    }
+    /// Node (ix, iy) of a storage index.
+    #[inline(always)]
+    pub fn node_of(&self, index: usize) -> (usize, usize) {
+        (index / self.ny - PAD, index % self.ny)
+    }
+    /// Position of node (ix, iy).
+    #[inline(always)]
+    pub fn node_pos(&self, ix: usize, iy: usize) -> [f64; 2] {
+        [
+            self.origin[0] + ix as f64 * self.h,
+            self.origin[1] + iy as f64 * self.h,
+        ]
+    }
+    /// Position in cell units ξ = (x − origin)/h.
+    #[inline(always)]
+    pub fn xi(&self, x: [f64; 2]) -> [f64; 2] {
+        [
+            (x[0] - self.origin[0]) / self.h,
+            (x[1] - self.origin[1]) / self.h,
+        ]
+    }
+    /// Cell (column, row) containing x (may be out of range).
+    #[inline(always)]
+    pub fn cell(&self, x: [f64; 2]) -> (i64, i64) {
+        let xi = self.xi(x);
+        (xi[0].floor() as i64, xi[1].floor() as i64)
+    }
+    /// Total storage length.
+    pub fn storage_len(&self) -> usize {
+        self.cols * self.ny
+    }
+}
+
+/// Mutable view of a contiguous range of grid storage and of the field-1 nodes inside it.
+pub struct GridMut<'a> {
+    /// Field-0 nodes of storage indices `[base, base + nodes.len())`.
+    pub nodes: &'a mut [Node],
+    /// Storage index of `nodes[0]`.
+    pub base: usize,
+    /// Field-1 nodes whose storage index lies in the range, in storage order.
+    pub f1: &'a mut [Node],
+    /// Their storage indices (same length as `f1`).
+    pub f1_index: &'a [u32],
+    /// Slot number of `f1[0]` in the whole field-1 table.
+    pub f1_base: usize,
+}
+
+impl<'a> GridMut<'a> {
+    /// Split at storage index `at` (absolute).
+    pub fn split_at(self, at: usize) -> (GridMut<'a>, GridMut<'a>) {
+        let cut = at.clamp(self.base, self.base + self.nodes.len()) - self.base;
+        let (n0, n1) = self.nodes.split_at_mut(cut);
+        let k = self.f1_index.partition_point(|&i| (i as usize) < at);
+        let (f0, f1) = self.f1.split_at_mut(k);
+        let (i0, i1) = self.f1_index.split_at(k);
+        (
+            GridMut {
+                nodes: n0,
+                base: self.base,
+                f1: f0,
+                f1_index: i0,
+                f1_base: self.f1_base,
+            },
+            GridMut {
+                nodes: n1,
+                base: self.base + cut,
+                f1,
+                f1_index: i1,
+                f1_base: self.f1_base + k,
+            },
+        )
+    }
+
+    /// The node of field `field` at storage index `index` (which must be in range; field-1
+    /// nodes are looked up through the dense slot map `slot_of`).
+    #[inline(always)]
+    pub fn node(&mut self, index: usize, field: u8, slot_of: &[u32]) -> &mut Node {
+        if field == 0 {
+            &mut self.nodes[index - self.base]
+        } else {
+            let slot = slot_of[index] as usize;
+            &mut self.f1[slot - self.f1_base]
+        }
+    }
+}
+
+/// Something combined across strips in a fixed order (deterministic reductions).
+pub trait Reduce: Default + Send {
+    /// Combine the result of a left (earlier) range with a right (later) one.
+    fn merge(self, right: Self) -> Self;
+}
+
+impl Reduce for () {
+    fn merge(self, _: Self) -> Self {}
+}
+
+/// Run `f` on every strip of colour `colour` (0 even, 1 odd) in parallel, each with mutable
+/// views of its particles and of the grid columns it may write. `bounds[s]..bounds[s+1]` is the
+/// particle range of strip `s`. Results are merged in strip order.
+pub fn for_strips<R, F>(
+    geom: &GridGeom,
+    bounds: &[usize],
+    colour: usize,
+    parts: PartsMut<'_>,
+    grid: GridMut<'_>,
+    f: &F,
+) -> R
+where
+    R: Reduce,
+    F: Fn(usize, PartsMut<'_>, GridMut<'_>) -> R + Sync,
+{
+    let n = geom.strips.saturating_sub(colour).div_ceil(2);
+    if n == 0 {
+        return R::default();
+    }
+    // Drop the storage before this colour's first chunk.
+    let (_, grid) = grid.split_at(colour * STRIP * geom.ny);
+    recurse(geom, bounds, colour, 0, n, parts, 0, grid, f)
+}
+
+#[allow(clippy::too_many_arguments)]
+fn recurse<R, F>(
+    geom: &GridGeom,
+    bounds: &[usize],
+    colour: usize,
+    k0: usize,
+    k1: usize,
+    parts: PartsMut<'_>,
+    pbase: usize,
+    grid: GridMut<'_>,
+    f: &F,
+) -> R
+where
+    R: Reduce,
+    F: Fn(usize, PartsMut<'_>, GridMut<'_>) -> R + Sync,
+{
+    if k1 - k0 == 1 {
+        let s = 2 * k0 + colour;
+        let (_, rest) = parts.split_at(bounds[s] - pbase);
+        let (mine, _) = rest.split_at(bounds[s + 1] - bounds[s]);
+        let end = (colour * STRIP + 2 * (k0 + 1) * STRIP) * geom.ny;
+        let (chunk, _) = grid.split_at(end);
+        return f(s, mine, chunk);
+    }
+    let mid = (k0 + k1) / 2;
+    let pcut = bounds[2 * mid + colour] - pbase;
+    let gcut = (colour * STRIP + 2 * mid * STRIP) * geom.ny;
+    let (pl, pr) = parts.split_at(pcut);
+    let (gl, gr) = grid.split_at(gcut);
+    let (a, b) = rayon::join(
+        || recurse(geom, bounds, colour, k0, mid, pl, pbase, gl, f),
+        || recurse(geom, bounds, colour, mid, k1, pr, pbase + pcut, gr, f),
+    );
+    a.merge(b)
+}

@@ -1,0 +1,140 @@
+//! Particles as structure-of-arrays, grouped by access: hot kinematics, mechanics, stress,
+//! and cold metadata. Kept sorted by cell (column-major) so that the scatter to the grid is
+//! a strip-coloured parallel loop (see `sim`).
+
+/// Position and velocity.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Kin {
+    /// Position (m).
+    pub x: [f64; 2],
+    /// Velocity (m/s).
+    pub v: [f64; 2],
+}
+
+/// Per-particle mechanical data.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Mech {
+    /// Mass (kg, per the scene's thickness).
+    pub m: f64,
+    /// Volume (m³, per the scene's thickness), undeformed.
+    pub vol: f64,
+    /// Half-width l in cell units (h/(2·ppc)/h).
+    pub lh: f64,
+    /// Strain energy density W (J/m³).
+    pub w: f64,
+    /// Material index.
+    pub mat: u32,
+    /// 1 + index of the load acting on the particle, 0 for none.
+    pub load: u32,
+}
+
+/// Cold metadata, read for output and diagnostics only.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Cold {
+    /// Initial position (m), for displacements.
+    pub x0: [f64; 2],
+    /// Displacement gradient (∂ux/∂x, ∂ux/∂y, ∂uy/∂x, ∂uy/∂y), accumulated as Σ L·Δt.
+    pub grad_u: [f64; 4],
+    /// Index of the particle in creation order (stable across re-sorting).
+    pub id: u32,
+    /// Body index.
+    pub body: u32,
+}
+
+/// All particles.
+#[derive(Debug, Clone, Default)]
+pub struct Particles {
+    /// Position and velocity.
+    pub kin: Vec<Kin>,
+    /// Mechanical data.
+    pub mech: Vec<Mech>,
+    /// Stress (xx, yy, xy, zz) in Pa.
+    pub stress: Vec<[f64; 4]>,
+    /// Metadata.
+    pub cold: Vec<Cold>,
+    /// Position at the end of the step being computed (scratch of the particle update).
+    pub x_next: Vec<[f64; 2]>,
+    /// Crack field of each particle–node pair: bit (3a + b) set means the pair (a, b) of the
+    /// 3×3 stencil uses velocity field 1. Empty when the scene has no cracks.
+    pub fmask: Vec<u16>,
+}
+
+impl Particles {
+    /// Number of particles.
+    pub fn len(&self) -> usize {
+        self.kin.len()
+    }
+    /// Whether there are none.
+    pub fn is_empty(&self) -> bool {
+        self.kin.is_empty()
+    }
+}
+
+/// Mutable views of a contiguous range of particles, splittable for parallel recursion.
+pub struct PartsMut<'a> {
+    /// Kinematics.
+    pub kin: &'a mut [Kin],
+    /// Mechanical data.
+    pub mech: &'a mut [Mech],
+    /// Stress.
+    pub stress: &'a mut [[f64; 4]],
+    /// Metadata.
+    pub cold: &'a mut [Cold],
+    /// End-of-step positions.
+    pub x_next: &'a mut [[f64; 2]],
+    /// Field masks (empty without cracks).
+    pub fmask: &'a mut [u16],
+}
+
+impl<'a> PartsMut<'a> {
+    /// Views of all particles.
+    pub fn new(p: &'a mut Particles) -> Self {
+        PartsMut {
+            kin: &mut p.kin,
+            mech: &mut p.mech,
+            stress: &mut p.stress,
+            cold: &mut p.cold,
+            x_next: &mut p.x_next,
+            fmask: &mut p.fmask,
+        }
+    }
+    /// Number of particles in the view.
+    pub fn len(&self) -> usize {
+        self.kin.len()
+    }
+    /// Whether the view is empty.
+    pub fn is_empty(&self) -> bool {
+        self.kin.is_empty()
+    }
+    /// Split at particle `i` (relative to the view).
+    pub fn split_at(self, i: usize) -> (PartsMut<'a>, PartsMut<'a>) {
+        let (k0, k1) = self.kin.split_at_mut(i);
+        let (m0, m1) = self.mech.split_at_mut(i);
+        let (s0, s1) = self.stress.split_at_mut(i);
+        let (c0, c1) = self.cold.split_at_mut(i);
+        let (x0, x1) = self.x_next.split_at_mut(i);
+        let (f0, f1) = if self.fmask.is_empty() {
+            (&mut [][..], &mut [][..])
+        } else {
+            self.fmask.split_at_mut(i)
+        };
+        (
+            PartsMut {
+                kin: k0,
+                mech: m0,
+                stress: s0,
+                cold: c0,
+                x_next: x0,
+                fmask: f0,
+            },
+            PartsMut {
+                kin: k1,
+                mech: m1,
+                stress: s1,
+                cold: c1,
+                x_next: x1,
+                fmask: f1,
+            },
+        )
+    }
+}

@@ -1,0 +1,206 @@
+//! The run directory of a local run (`run-output.md`): `summary.json`, `energy.csv`,
+//! `crack_tips.csv`, `fields.mcap`.
+//!
+//! Every batch is written through to the files as it arrives (CSV flushed, MCAP flushed at
+//! each snapshot), so a run that fails or is killed leaves what it had produced.
+
+use std::fs::File;
+use std::io::{BufWriter, Write};
+use std::path::{Path, PathBuf};
+
+use fracture_api::Scene;
+use fracture_api::results::{
+    CRACK_TIPS_CSV_HEADER, CrackTipRow, ENERGY_CSV_HEADER, EnergyRow, Progress, Snapshot, Summary,
+};
+
+use crate::mcapfile::{McapFileError, McapWriter};
+use crate::{Control, RunSink, SinkError};
+
+/// File name of the summary.
+pub const SUMMARY_FILE: &str = "summary.json";
+/// File name of the energy history.
+pub const ENERGY_FILE: &str = "energy.csv";
+/// File name of the crack-tip history.
+pub const CRACK_TIPS_FILE: &str = "crack_tips.csv";
+/// File name of the MCAP file.
+pub const FIELDS_FILE: &str = "fields.mcap";
+
+/// Why the run directory could not be written.
+#[derive(Debug, thiserror::Error)]
+pub enum LocalOutputError {
+    /// A file could not be created or written.
+    #[error("{path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// The error.
+        source: std::io::Error,
+    },
+    /// The MCAP file could not be written.
+    #[error("{path}: {source}")]
+    Mcap {
+        /// The file.
+        path: PathBuf,
+        /// The error.
+        source: McapFileError,
+    },
+}
+
+impl From<LocalOutputError> for SinkError {
+    fn from(e: LocalOutputError) -> Self {
+        SinkError(e.to_string())
+    }
+}
+
+/// A [`RunSink`] writing the run directory. Progress reports are accepted and ignored
+/// (wrap it to show them); it never cancels.
+pub struct LocalOutput {
+    dir: PathBuf,
+    energy: BufWriter<File>,
+    crack_tips: BufWriter<File>,
+    mcap: McapWriter,
+    finished: bool,
+}
+
+impl LocalOutput {
+    /// Create `dir` (and parents) and the files, with their CSV header rows. Existing files
+    /// of a previous run are replaced; a stale `summary.json` is removed at once, so the
+    /// directory never shows an old summary beside new histories.
+    pub fn create(dir: impl AsRef<Path>) -> Result<Self, LocalOutputError> {
+        let dir = dir.as_ref().to_path_buf();
+        let io = |path: &Path| {
+            let path = path.to_path_buf();
+            move |source| LocalOutputError::Io { path, source }
+        };
+        std::fs::create_dir_all(&dir).map_err(io(&dir))?;
+        let summary = dir.join(SUMMARY_FILE);
+        match std::fs::remove_file(&summary) {
+            Ok(()) => {}
+            Err(e) if e.kind() == std::io::ErrorKind::NotFound => {}
+            Err(e) => return Err(io(&summary)(e)),
+        }
+        let csv = |name: &str, header: &str| -> Result<BufWriter<File>, LocalOutputError> {
+            let path = dir.join(name);
+            let file = File::create(&path).map_err(io(&path))?;
+            let mut w = BufWriter::new(file);
+            writeln!(w, "{header}").map_err(io(&path))?;
+            w.flush().map_err(io(&path))?;
+            Ok(w)
+        };
+        let energy = csv(ENERGY_FILE, ENERGY_CSV_HEADER)?;
+        let crack_tips = csv(CRACK_TIPS_FILE, CRACK_TIPS_CSV_HEADER)?;
+        let mcap_path = dir.join(FIELDS_FILE);
+        let mcap = McapWriter::create(&mcap_path).map_err(|source| LocalOutputError::Mcap {
+            path: mcap_path.clone(),
+            source,
+        })?;
+        Ok(LocalOutput {
+            dir,
+            energy,
+            crack_tips,
+            mcap,
+            finished: false,
+        })
+    }
+
+    /// Also record the scene in `fields.mcap` (metadata record `scene`).
+    pub fn write_scene(&mut self, scene: &Scene) -> Result<(), LocalOutputError> {
+        self.mcap
+            .write_scene(scene)
+            .map_err(|source| self.mcap_error(source))
+    }
+
+    /// The run directory.
+    pub fn dir(&self) -> &Path {
+        &self.dir
+    }
+
+    fn io_error(&self, name: &str, source: std::io::Error) -> LocalOutputError {
+        LocalOutputError::Io {
+            path: self.dir.join(name),
+            source,
+        }
+    }
+
+    fn mcap_error(&self, source: McapFileError) -> LocalOutputError {
+        LocalOutputError::Mcap {
+            path: self.dir.join(FIELDS_FILE),
+            source,
+        }
+    }
+
+    /// Write `summary.json` (pretty JSON, newline-terminated) atomically: to a temporary
+    /// file, then renamed.
+    fn write_summary(&self, summary: &Summary) -> Result<(), LocalOutputError> {
+        let path = self.dir.join(SUMMARY_FILE);
+        let tmp = self.dir.join(".summary.json.tmp");
+        let mut text = serde_json::to_string_pretty(summary)
+            .map_err(|e| self.io_error(SUMMARY_FILE, std::io::Error::other(e)))?;
+        text.push('\n');
+        std::fs::write(&tmp, text).map_err(|e| self.io_error(SUMMARY_FILE, e))?;
+        std::fs::rename(&tmp, &path).map_err(|e| self.io_error(SUMMARY_FILE, e))
+    }
+}
+
+impl RunSink for LocalOutput {
+    fn progress(&mut self, _p: &Progress) -> Result<Control, SinkError> {
+        Ok(Control::Continue)
+    }
+
+    fn energy(&mut self, rows: &[EnergyRow]) -> Result<(), SinkError> {
+        for r in rows {
+            writeln!(self.energy, "{}", r.to_csv()).map_err(|e| self.io_error(ENERGY_FILE, e))?;
+        }
+        self.energy
+            .flush()
+            .map_err(|e| self.io_error(ENERGY_FILE, e))?;
+        self.mcap
+            .write_energy(rows)
+            .map_err(|e| self.mcap_error(e))?;
+        Ok(())
+    }
+
+    fn crack_tips(&mut self, rows: &[CrackTipRow]) -> Result<(), SinkError> {
+        for r in rows {
+            writeln!(self.crack_tips, "{}", r.to_csv())
+                .map_err(|e| self.io_error(CRACK_TIPS_FILE, e))?;
+        }
+        self.crack_tips
+            .flush()
+            .map_err(|e| self.io_error(CRACK_TIPS_FILE, e))?;
+        self.mcap
+            .write_crack_tips(rows)
+            .map_err(|e| self.mcap_error(e))?;
+        Ok(())
+    }
+
+    fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError> {
+        self.mcap
+            .write_snapshot(snap)
+            .map_err(|e| self.mcap_error(e))?;
+        Ok(())
+    }
+
+    fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
+        if self.finished {
+            return Ok(());
+        }
+        self.finished = true;
+        // Finish every file even if one fails; report the first failure.
+        let energy = self
+            .energy
+            .flush()
+            .map_err(|e| self.io_error(ENERGY_FILE, e));
+        let tips = self
+            .crack_tips
+            .flush()
+            .map_err(|e| self.io_error(CRACK_TIPS_FILE, e));
+        let mcap = self.mcap.finish().map_err(|e| self.mcap_error(e));
+        let summary = self.write_summary(summary);
+        energy?;
+        tips?;
+        mcap?;
+        summary?;
+        Ok(())
+    }
+}
