@@ -12,12 +12,14 @@ pub struct Web;
 /// The example scenes.
 #[derive(RustEmbed)]
 #[folder = "../scenes/"]
-#[include = "*.json"]
 pub struct Scenes;
 
 /// Every embedded example scene, sorted by name (files that are not JSON objects skipped).
 pub fn scenes() -> Vec<SceneEntry> {
-    let mut names: Vec<String> = Scenes::iter().map(|n| n.to_string()).collect();
+    let mut names: Vec<String> = Scenes::iter()
+        .map(|n| n.to_string())
+        .filter(|n| n.ends_with(".json"))
+        .collect();
     names.sort();
     names
         .into_iter()

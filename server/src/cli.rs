@@ -371,7 +371,7 @@ async fn supervise_workers(
                         tokio::time::sleep(backoff).await;
                         backoff = (backoff * 2).min(Duration::from_secs(5));
                     }
-                    _ = sd.wait_for(|s| *s) => {
+                    _ = crate::server::until_shutdown(&mut sd) => {
                         let _ = child.start_kill();
                         let _ = child.wait().await;
                         return;

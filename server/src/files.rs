@@ -55,16 +55,20 @@ impl JobFiles {
     }
 
     /// A claim under `fence` starts: drop any earlier writer and file, open a fresh file.
-    pub fn start(&self, id: &str, fence: i64) -> std::io::Result<()> {
+    pub fn start(&self, id: &str, fence: i64, scene: Option<&fracture_api::Scene>) -> std::io::Result<()> {
         let old = self.lock().remove(id);
-        if let Some((_, w)) = old {
+        if let Some((_, mut w)) = old {
             let _ = w.finish();
         }
         let dir = self.dir(id);
         std::fs::create_dir_all(&dir)?;
         let path = self.mcap_path(id);
         let _ = std::fs::remove_file(&path);
-        let w = McapWriter::create(&path).map_err(|e| std::io::Error::other(e.to_string()))?;
+        let mut w = McapWriter::create(&path).map_err(|e| std::io::Error::other(e.to_string()))?;
+        if let Some(scene) = scene {
+            w.write_scene(scene)
+                .map_err(|e| std::io::Error::other(e.to_string()))?;
+        }
         self.lock().insert(id.to_string(), (fence, w));
         Ok(())
     }
@@ -90,7 +94,7 @@ impl JobFiles {
     /// Finish the job's file (summary and index written: a valid MCAP).
     pub fn finish(&self, id: &str) -> std::io::Result<()> {
         let w = self.lock().remove(id);
-        if let Some((_, w)) = w {
+        if let Some((_, mut w)) = w {
             w.finish().map_err(|e| std::io::Error::other(e.to_string()))?;
         }
         Ok(())
@@ -99,7 +103,7 @@ impl JobFiles {
     /// Finish every open file (shutdown).
     pub fn finish_all(&self) {
         let all: Vec<(String, (i64, McapWriter))> = self.lock().drain().collect();
-        for (id, (_, w)) in all {
+        for (id, (_, mut w)) in all {
             if let Err(e) = w.finish() {
                 tracing::warn!(job = %id, error = %e, "could not finish MCAP file");
             }

@@ -589,16 +589,17 @@ async fn job_events(
             return None;
         }
         loop {
-            tokio::select! {
-                r = rx.recv() => match r {
-                    Ok(ev) => {
-                        let term = matches!(&ev, JobEvent::Status(s) if s.status.is_terminal());
-                        return Some((Ok(sse(&ev)), (rx, sd, term)));
-                    }
-                    Err(RecvError::Lagged(_)) => continue,
-                    Err(RecvError::Closed) => return None,
-                },
-                _ = sd.wait_for(|s| *s) => return None,
+            let next = tokio::select! {
+                r = rx.recv() => Some(r),
+                _ = crate::server::until_shutdown(&mut sd) => None,
+            };
+            match next {
+                None | Some(Err(RecvError::Closed)) => return None,
+                Some(Err(RecvError::Lagged(_))) => continue,
+                Some(Ok(ev)) => {
+                    let term = matches!(&ev, JobEvent::Status(s) if s.status.is_terminal());
+                    return Some((Ok(sse(&ev)), (rx, sd, term)));
+                }
             }
         }
     });
@@ -634,7 +635,8 @@ async fn worker_claim(
             let job = c.job;
             let files = st.files.clone();
             let (jid, fence) = (job.id.clone(), job.fence);
-            tokio::task::spawn_blocking(move || files.start(&jid, fence))
+            let scene: Option<Scene> = serde_json::from_str(&job.scene).ok();
+            tokio::task::spawn_blocking(move || files.start(&jid, fence, scene.as_ref()))
                 .await
                 .map_err(ApiError::internal)?
                 .map_err(ApiError::internal)?;
@@ -659,7 +661,7 @@ async fn worker_claim(
         tokio::select! {
             _ = notified => {}
             _ = tokio::time::sleep(nap) => {}
-            _ = shutdown.wait_for(|s| *s) => {}
+            _ = crate::server::until_shutdown(&mut shutdown) => {}
         }
     }
 }

@@ -64,7 +64,7 @@ impl AppState {
         loop {
             tokio::select! {
                 _ = tokio::time::sleep(period) => {}
-                _ = shutdown.wait_for(|s| *s) => return,
+                _ = crate::server::until_shutdown(&mut shutdown) => return,
             }
             match self.store.reap(self.cfg.max_attempts).await {
                 Ok(rows) => {
@@ -113,4 +113,9 @@ pub fn random_hex(n: usize) -> String {
 /// A new job id: time-ordered prefix plus randomness.
 pub fn new_job_id() -> String {
     format!("{:011x}{}", crate::store::now_ms(), random_hex(4))
+}
+
+/// Resolves once shutdown has begun (or the sender is gone).
+pub async fn until_shutdown(rx: &mut watch::Receiver<bool>) {
+    let _ = rx.wait_for(|s| *s).await;
 }
