@@ -218,9 +218,15 @@ fn parse_job_request(value: serde_json::Value) -> Result<JobRequest, ApiError> {
         .is_some_and(|o| o.contains_key("scene") && !o.contains_key("grid"));
     if wrapped {
         serde_path_to_error::deserialize::<_, JobRequest>(value).map_err(|e| {
+            // Paths are relative to the scene document in both request forms.
             let path = e.path().to_string();
+            let path = match path.strip_prefix("scene.") {
+                Some(p) => p.to_string(),
+                None if path == "." => "(document)".to_string(),
+                None => path,
+            };
             ApiError::InvalidScene(vec![fracture_api::jobs::ErrorDetail {
-                path: if path == "." { "(document)".into() } else { path },
+                path,
                 message: e.into_inner().to_string(),
             }])
         })
@@ -578,10 +584,12 @@ async fn job_events(
     // Subscribe before reading the state so no change falls between the two.
     let rx = st.hub.subscribe(&id);
     let job = job_or_404(&st, &id).await?;
-    let mut first = vec![sse(&JobEvent::Status(job.status_event()))];
+    // Current state first: progress, then status (so a terminal status stays the last event).
+    let mut first = Vec::new();
     if let Some(p) = job.progress() {
         first.push(sse(&JobEvent::Progress(p)));
     }
+    first.push(sse(&JobEvent::Status(job.status_event())));
     let done = job.status().is_terminal();
     let shutdown = st.shutdown.clone();
     let live = futures::stream::unfold((rx, shutdown, done), |(mut rx, mut sd, done)| async move {

@@ -8,21 +8,43 @@ use std::time::{Duration, Instant};
 use serde_json::Value;
 
 /// The `fracture` binary next to the test executable (`target/<profile>/fracture`).
+///
+/// Cargo does not build the binaries of dependencies, so the first call runs
+/// `cargo build -p fracture-server --bin fracture` for the test's profile (quick when it is
+/// up to date; `cargo test --workspace` has built it already).
 pub fn fracture_bin() -> PathBuf {
-    let exe = std::env::current_exe().expect("test executable path");
-    let mut dir = exe.parent().map(Path::to_path_buf).expect("parent");
-    // target/<profile>/deps/<test> → target/<profile>
-    if dir.ends_with("deps") {
-        dir.pop();
-    }
-    let bin = dir.join(format!("fracture{}", std::env::consts::EXE_SUFFIX));
-    assert!(bin.exists(), "{} not built (fracture-server is a dev-dependency)", bin.display());
-    bin
+    static BUILT: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
+    BUILT
+        .get_or_init(|| {
+            let exe = std::env::current_exe().expect("test executable path");
+            let mut dir = exe.parent().map(Path::to_path_buf).expect("parent");
+            // target/<profile>/deps/<test> → target/<profile>
+            if dir.ends_with("deps") {
+                dir.pop();
+            }
+            let bin = dir.join(format!("fracture{}", std::env::consts::EXE_SUFFIX));
+            if std::env::var_os("FRACTURE_E2E_NO_BUILD").is_none() {
+                let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
+                let mut cmd = Command::new(cargo);
+                cmd.args(["build", "-q", "-p", "fracture-server", "--bin", "fracture"]);
+                if dir.file_name().is_some_and(|n| n == "release") {
+                    cmd.arg("--release");
+                }
+                let _ = cmd.status();
+            }
+            assert!(bin.exists(), "{} is not built: cargo build -p fracture-server", bin.display());
+            bin
+        })
+        .clone()
 }
+
+/// Tests start one server at a time: the machine has few cores and leases are short.
+static ONE_AT_A_TIME: std::sync::Mutex<()> = std::sync::Mutex::new(());
 
 /// A running server process.
 pub struct Server {
     child: Option<Child>,
+    _turn: std::sync::MutexGuard<'static, ()>,
     /// Base URL, `http://127.0.0.1:PORT`.
     pub url: String,
     /// Its data folder.
@@ -36,8 +58,10 @@ impl Server {
     /// Start a server on a free port with `extra` arguments (e.g. `--workers 2`).
     pub fn start(data: &Path, extra: &[&str]) -> Server {
         let args: Vec<String> = extra.iter().map(|s| s.to_string()).collect();
+        let turn = ONE_AT_A_TIME.lock().unwrap_or_else(|p| p.into_inner());
         let mut s = Server {
             child: None,
+            _turn: turn,
             url: String::new(),
             data: data.to_path_buf(),
             args,
