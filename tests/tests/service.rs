@@ -83,8 +83,8 @@ fn job_lifecycle_results_readable_while_running_and_after() {
     assert_eq!(health["status"], "ok");
     assert_eq!(health["workers"], 1);
 
-    // Long enough to be seen running: 30×15 cells (1800 particles), 2000 steps, 6 snapshots.
-    let id = s.submit(&json!({"scene": scene("lifecycle", 30, 15, 2000, 6), "labels": {"suite": "e2e"}}));
+    // Long enough to be seen running: 30×15 cells (1800 particles), 4000 steps (≈ 2 s), 6 snapshots.
+    let id = s.submit(&json!({"scene": scene("lifecycle", 30, 15, 4000, 6), "labels": {"suite": "e2e"}}));
     let events = std::thread::scope(|sc| {
         let ev = sc.spawn(|| read_events(&s, &id, LONG));
         // While it runs, every route answers.
@@ -120,6 +120,7 @@ fn job_lifecycle_results_readable_while_running_and_after() {
     });
     let j = s.job(&id);
     assert_eq!(status(&j), "completed", "{j}");
+    eprintln!("lifecycle run: {}", j["summary"]);
     assert_eq!(j["attempts"], 1);
     assert_eq!(j["labels"]["suite"], "e2e");
     assert_eq!(j["summary"]["status"], "completed");
@@ -227,7 +228,7 @@ fn job_lifecycle_results_readable_while_running_and_after() {
 fn killed_worker_job_is_rerun_by_another_without_duplicates() {
     let dir = tempfile::tempdir().expect("tmp");
     let s = Server::start(dir.path(), &["--workers", "2", "--lease-seconds", "2"]);
-    let id = s.submit(&scene("kill-me", 30, 15, 3000, 5));
+    let id = s.submit(&scene("kill-me", 30, 15, 8000, 5));
     let j = s.wait_for(&id, LONG, |j| {
         status(j) == "running" && j["progress"]["step"].as_u64().unwrap_or(0) > 0
             || matches!(status(j), "completed" | "failed")
@@ -254,9 +255,11 @@ fn server_restart_with_jobs_queued_and_running_loses_nothing() {
     let dir = tempfile::tempdir().expect("tmp");
     let mut s = Server::start(dir.path(), &["--workers", "1", "--lease-seconds", "3"]);
     let ids: Vec<String> = (0..4)
-        .map(|k| s.submit(&scene(&format!("restart-{k}"), 20, 10, 2000, 2)))
+        .map(|k| s.submit(&scene(&format!("restart-{k}"), 20, 10, 6000, 2)))
         .collect();
     s.wait_for(&ids[0], LONG, |j| status(j) != "queued");
+    assert_eq!(status(&s.job(&ids[0])), "running", "make the scenes longer");
+    assert_eq!(status(&s.job(&ids[3])), "queued");
     // An open event stream must not hold the shutdown up.
     let url = s.at(&format!("/api/v1/jobs/{}/events", ids[3]));
     let sse = std::thread::spawn(move || {
@@ -279,6 +282,8 @@ fn server_restart_with_jobs_queued_and_running_loses_nothing() {
     for id in &ids {
         let j = s.wait_done(id, LONG);
         assert_eq!(status(&j), "completed", "{j}");
+        // The job interrupted by the restart was given back without counting an attempt.
+        assert_eq!(j["attempts"], 1, "{j}");
         assert_no_duplicates(&s, id);
     }
     let all = s.get_json("/api/v1/jobs");
