@@ -31,7 +31,12 @@ pub fn scenes() -> Vec<SceneEntry> {
                 .and_then(|d| d.as_str())
                 .unwrap_or_default()
                 .to_string();
-            let name = n.rsplit('/').next().unwrap_or(&n).trim_end_matches(".json").to_string();
+            let name = n
+                .rsplit('/')
+                .next()
+                .unwrap_or(&n)
+                .trim_end_matches(".json")
+                .to_string();
             Some(SceneEntry {
                 name,
                 description,

@@ -182,7 +182,9 @@ async fn serve_async(a: ServeArgs) -> anyhow::Result<()> {
     if !recovered.is_empty() {
         tracing::info!(jobs = recovered.len(), "re-queued jobs left running");
     }
-    let cores = std::thread::available_parallelism().map(|n| n.get()).unwrap_or(2);
+    let cores = std::thread::available_parallelism()
+        .map(|n| n.get())
+        .unwrap_or(2);
     let workers = a.workers.unwrap_or((cores / 2).max(1));
     let worker_threads = a.worker_threads.unwrap_or((cores / workers.max(1)).max(1));
     let lease = Duration::from_secs_f64(a.lease_seconds.clamp(0.5, 3600.0));

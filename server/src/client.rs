@@ -89,7 +89,11 @@ impl Api {
         })
     }
 
-    fn post_json<T: serde::Serialize>(&self, path: &str, body: &T) -> Result<Response, ClientError> {
+    fn post_json<T: serde::Serialize>(
+        &self,
+        path: &str,
+        body: &T,
+    ) -> Result<Response, ClientError> {
         Self::check(
             self.http
                 .post(self.url(path))
@@ -228,7 +232,10 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
                     tracing::info!("parent server exited; worker stops");
                     std::process::exit(0);
                 }
-                let hb = Heartbeat { fence, progress: None };
+                let hb = Heartbeat {
+                    fence,
+                    progress: None,
+                };
                 match api.post_json(&format!("jobs/{job}/heartbeat"), &hb) {
                     Ok(r) => {
                         if let Ok(rep) = r.json::<HeartbeatReply>()
@@ -364,7 +371,9 @@ impl RunSink for HttpSink<'_> {
         let body = codec::encode_snapshot(snap);
         let path = format!("jobs/{}/snapshots?fence={}", self.job, self.fence);
         self.api
-            .retry(Self::BUDGET, || self.api.post_bytes(&path, body.clone()).map(drop))
+            .retry(Self::BUDGET, || {
+                self.api.post_bytes(&path, body.clone()).map(drop)
+            })
             .map_err(|e| self.fail(e))
     }
 
@@ -437,7 +446,10 @@ pub fn submit(cfg: &SubmitConfig, out: &mut dyn Write) -> anyhow::Result<SubmitO
     let status = r.status();
     let text = r.text()?;
     if status != StatusCode::CREATED {
-        return Ok(SubmitOutcome::Rejected(status.as_u16(), show_error(status.as_u16(), &text)));
+        return Ok(SubmitOutcome::Rejected(
+            status.as_u16(),
+            show_error(status.as_u16(), &text),
+        ));
     }
     let job: JobInfo = serde_json::from_str(&text)?;
     writeln!(out, "{}", job.id)?;

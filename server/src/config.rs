@@ -81,7 +81,10 @@ impl Limits {
                 })
                 .collect();
             Err(ApiError::LimitExceeded {
-                message: format!("the scene exceeds this server's limits: {}", names.join(", ")),
+                message: format!(
+                    "the scene exceeds this server's limits: {}",
+                    names.join(", ")
+                ),
                 details,
             })
         }
@@ -93,7 +96,11 @@ pub fn snapshot_count(scene: &Scene) -> u64 {
     let dt = scene.output.snapshot_interval;
     if dt > 0.0 && dt.is_finite() && scene.time.end.is_finite() {
         let n = (scene.time.end / dt).floor();
-        if n >= 0.0 && n < 1e15 { n as u64 + 1 } else { u64::MAX }
+        if (0.0..1e15).contains(&n) {
+            n as u64 + 1
+        } else {
+            u64::MAX
+        }
     } else {
         0
     }

@@ -1,15 +1,14 @@
 //! The one error type of the HTTP API and the JSON extractor that reports malformed bodies
 //! in the API's error format.
 
+use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
 use axum::extract::{FromRequest, Request};
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
-use axum::body::Bytes;
-use fracture_api::jobs::{ErrorBody, ErrorDetail};
 use fracture_api::ValidationErrors;
+use fracture_api::jobs::{ErrorBody, ErrorDetail};
 use serde::de::DeserializeOwned;
-
 
 /// Everything a request can fail with; each variant maps to one status code and error kind.
 #[derive(Debug, thiserror::Error)]
@@ -140,7 +139,10 @@ pub fn bytes_rejection(r: BytesRejection, limit: usize) -> ApiError {
     if r.status() == StatusCode::PAYLOAD_TOO_LARGE {
         ApiError::PayloadTooLarge(limit)
     } else {
-        ApiError::BadRequest(format!("could not read the request body: {}", r.body_text()))
+        ApiError::BadRequest(format!(
+            "could not read the request body: {}",
+            r.body_text()
+        ))
     }
 }
 

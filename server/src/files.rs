@@ -17,7 +17,9 @@ pub struct JobFiles {
 
 impl std::fmt::Debug for JobFiles {
     fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
-        f.debug_struct("JobFiles").field("root", &self.root).finish()
+        f.debug_struct("JobFiles")
+            .field("root", &self.root)
+            .finish()
     }
 }
 
@@ -55,7 +57,12 @@ impl JobFiles {
     }
 
     /// A claim under `fence` starts: drop any earlier writer and file, open a fresh file.
-    pub fn start(&self, id: &str, fence: i64, scene: Option<&fracture_api::Scene>) -> std::io::Result<()> {
+    pub fn start(
+        &self,
+        id: &str,
+        fence: i64,
+        scene: Option<&fracture_api::Scene>,
+    ) -> std::io::Result<()> {
         let old = self.lock().remove(id);
         if let Some((_, mut w)) = old {
             let _ = w.finish();
@@ -95,7 +102,8 @@ impl JobFiles {
     pub fn finish(&self, id: &str) -> std::io::Result<()> {
         let w = self.lock().remove(id);
         if let Some((_, mut w)) = w {
-            w.finish().map_err(|e| std::io::Error::other(e.to_string()))?;
+            w.finish()
+                .map_err(|e| std::io::Error::other(e.to_string()))?;
         }
         Ok(())
     }

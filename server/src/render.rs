@@ -29,7 +29,10 @@ pub fn default_component(kind: FieldKind) -> &'static str {
 }
 
 /// Resolve a URL field name (component or kind) to a component of the snapshot.
-pub fn resolve<'a>(snap: &'a Snapshot, field: &str) -> Option<&'a fracture_api::results::FieldComponent> {
+pub fn resolve<'a>(
+    snap: &'a Snapshot,
+    field: &str,
+) -> Option<&'a fracture_api::results::FieldComponent> {
     snap.component(field).or_else(|| {
         FieldKind::from_name(field).and_then(|k| {
             snap.component(default_component(k)).or_else(|| {
@@ -215,7 +218,11 @@ pub fn render_png(snap: &Snapshot, field: &str) -> Result<Vec<u8>, RenderError> 
         }
     }
     // Cracks: node (ix, iy) is at origin + (ix, iy)·h; its pixel is that node's square.
-    let h_cell = if snap.cell_size > 0.0 { snap.cell_size } else { 1.0 };
+    let h_cell = if snap.cell_size > 0.0 {
+        snap.cell_size
+    } else {
+        1.0
+    };
     let to_px = |p: &[f64; 2]| {
         let fx = (p[0] - snap.origin[0]) / h_cell;
         let fy = (p[1] - snap.origin[1]) / h_cell;
@@ -224,7 +231,11 @@ pub fn render_png(snap: &Snapshot, field: &str) -> Result<Vec<u8>, RenderError> 
             margin as f64 + (ny as f64 - 0.5 - fy) * scale as f64,
         )
     };
-    let crack_colour = if map == Map::Fringe { [255, 200, 0] } else { [0, 0, 0] };
+    let crack_colour = if map == Map::Fringe {
+        [255, 200, 0]
+    } else {
+        [0, 0, 0]
+    };
     for crack in &snap.cracks {
         for seg in crack.windows(2) {
             c.line(to_px(&seg[0]), to_px(&seg[1]), crack_colour, 1);
@@ -293,8 +304,14 @@ mod tests {
             cell_size: 0.001,
             fields: vec!["stress".into(), "fringe".into()],
             components: vec![
-                FieldComponent { name: "sxx".into(), values: vals.clone() },
-                FieldComponent { name: "fringe".into(), values: vals.iter().map(|v| v.abs() / 50.0).collect() },
+                FieldComponent {
+                    name: "sxx".into(),
+                    values: vals.clone(),
+                },
+                FieldComponent {
+                    name: "fringe".into(),
+                    values: vals.iter().map(|v| v.abs() / 50.0).collect(),
+                },
             ],
             cracks: vec![vec![[0.0, 0.005], [0.01, 0.005]]],
         };
@@ -302,6 +319,9 @@ mod tests {
             let png = render_png(&snap, f).expect("renders");
             assert_eq!(&png[1..4], b"PNG");
         }
-        assert!(matches!(render_png(&snap, "vx"), Err(RenderError::UnknownField(_))));
+        assert!(matches!(
+            render_png(&snap, "vx"),
+            Err(RenderError::UnknownField(_))
+        ));
     }
 }

@@ -117,13 +117,20 @@ fn bearer(headers: &HeaderMap) -> Option<&str> {
     headers
         .get(header::AUTHORIZATION)
         .and_then(|v| v.to_str().ok())
-        .and_then(|v| v.strip_prefix("Bearer ").or_else(|| v.strip_prefix("bearer ")))
+        .and_then(|v| {
+            v.strip_prefix("Bearer ")
+                .or_else(|| v.strip_prefix("bearer "))
+        })
         .map(str::trim)
 }
 
 fn same(a: &str, b: &str) -> bool {
     // Length leaks, content does not: compare every byte.
-    a.len() == b.len() && a.bytes().zip(b.bytes()).fold(0u8, |acc, (x, y)| acc | (x ^ y)) == 0
+    a.len() == b.len()
+        && a.bytes()
+            .zip(b.bytes())
+            .fold(0u8, |acc, (x, y)| acc | (x ^ y))
+            == 0
 }
 
 fn require_api_token(st: &AppState, headers: &HeaderMap) -> Result<(), ApiError> {
@@ -416,7 +423,9 @@ async fn delete_job(
         )));
     }
     if !st.store.delete(&id).await? {
-        return Err(ApiError::Conflict(format!("job `{id}` could not be deleted")));
+        return Err(ApiError::Conflict(format!(
+            "job `{id}` could not be deleted"
+        )));
     }
     let files = st.files.clone();
     let id2 = id.clone();
@@ -465,7 +474,10 @@ async fn get_crack_tips(
     job_or_404(&st, &id).await?;
     let rows = st.store.crack_tips(&id, q.since).await?;
     if wants_csv(&headers) {
-        Ok(csv_response(CRACK_TIPS_CSV_HEADER, rows.iter().map(CrackTipRow::to_csv)))
+        Ok(csv_response(
+            CRACK_TIPS_CSV_HEADER,
+            rows.iter().map(CrackTipRow::to_csv),
+        ))
     } else {
         Ok(Json(rows).into_response())
     }
@@ -485,7 +497,10 @@ async fn get_energy(
     job_or_404(&st, &id).await?;
     let rows = st.store.energy(&id, q.since).await?;
     if wants_csv(&headers) {
-        Ok(csv_response(ENERGY_CSV_HEADER, rows.iter().map(EnergyRow::to_csv)))
+        Ok(csv_response(
+            ENERGY_CSV_HEADER,
+            rows.iter().map(EnergyRow::to_csv),
+        ))
     } else {
         Ok(Json(rows).into_response())
     }
@@ -544,7 +559,10 @@ async fn snapshot_png(
     params(("id" = String, Path, description = "Job id")),
     responses((status = 200, description = "MCAP", content_type = "application/octet-stream"),
         (status = 404, description = "Unknown id, or no file yet", body = ErrorDoc)))]
-async fn fields_mcap(State(st): State<AppState>, Path(id): Path<String>) -> Result<Response, ApiError> {
+async fn fields_mcap(
+    State(st): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Response, ApiError> {
     job_or_404(&st, &id).await?;
     let path = st.files.mcap_path(&id);
     match tokio::fs::read(&path).await {
@@ -723,7 +741,9 @@ async fn worker_energy(
 ) -> Result<StatusCode, ApiError> {
     require_worker_token(&st, &headers)?;
     let rows: Vec<EnergyRow> = b.rows.into_iter().map(Into::into).collect();
-    st.store.append_energy(&id, b.fence, st.cfg.lease, &rows).await?;
+    st.store
+        .append_energy(&id, b.fence, st.cfg.lease, &rows)
+        .await?;
     write_file(&st, &id, b.fence, Record::Energy(rows.clone())).await?;
     st.hub.send(&id, JobEvent::Energy(rows));
     Ok(StatusCode::NO_CONTENT)
@@ -835,7 +855,11 @@ async fn static_files(uri: Uri) -> Response {
     });
     match file {
         Some(f) => {
-            let ct = crate::assets::mime(if path.contains('.') { path } else { "index.html" });
+            let ct = crate::assets::mime(if path.contains('.') {
+                path
+            } else {
+                "index.html"
+            });
             ([(header::CONTENT_TYPE, ct)], f.data.into_owned()).into_response()
         }
         None => {

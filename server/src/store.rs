@@ -222,10 +222,12 @@ impl Store {
 
     /// One job.
     pub async fn get(&self, id: &str) -> Result<Option<JobRow>, StoreError> {
-        Ok(sqlx::query_as::<_, JobRow>("SELECT * FROM jobs WHERE id = ?")
-            .bind(id)
-            .fetch_optional(&self.pool)
-            .await?)
+        Ok(
+            sqlx::query_as::<_, JobRow>("SELECT * FROM jobs WHERE id = ?")
+                .bind(id)
+                .fetch_optional(&self.pool)
+                .await?,
+        )
     }
 
     /// Jobs, newest first.
@@ -311,7 +313,11 @@ impl Store {
 
     /// Claim the best queued job (highest priority, then oldest) for `worker`, with a lease.
     /// A job claimed again (after a lost worker) loses the previous attempt's rows.
-    pub async fn claim(&self, worker: &str, lease: Duration) -> Result<Option<Claimed>, StoreError> {
+    pub async fn claim(
+        &self,
+        worker: &str,
+        lease: Duration,
+    ) -> Result<Option<Claimed>, StoreError> {
         let until = now_ms() + lease.as_millis() as i64;
         let mut tx = self.pool.begin().await?;
         let job = sqlx::query_as::<_, JobRow>(
@@ -567,7 +573,10 @@ impl Store {
         .fetch_all(&self.pool)
         .await?;
         let f = |r: &sqlx::sqlite::SqliteRow, c: &str| -> f64 {
-            r.try_get::<Option<f64>, _>(c).ok().flatten().unwrap_or(f64::NAN)
+            r.try_get::<Option<f64>, _>(c)
+                .ok()
+                .flatten()
+                .unwrap_or(f64::NAN)
         };
         Ok(rows
             .iter()
@@ -598,9 +607,13 @@ impl Store {
         .fetch_all(&self.pool)
         .await?;
         let f = |r: &sqlx::sqlite::SqliteRow, c: &str| -> f64 {
-            r.try_get::<Option<f64>, _>(c).ok().flatten().unwrap_or(f64::NAN)
+            r.try_get::<Option<f64>, _>(c)
+                .ok()
+                .flatten()
+                .unwrap_or(f64::NAN)
         };
-        let i = |r: &sqlx::sqlite::SqliteRow, c: &str| -> i64 { r.try_get::<i64, _>(c).unwrap_or(0) };
+        let i =
+            |r: &sqlx::sqlite::SqliteRow, c: &str| -> i64 { r.try_get::<i64, _>(c).unwrap_or(0) };
         Ok(rows
             .iter()
             .map(|r| CrackTipRow {
@@ -622,10 +635,12 @@ impl Store {
 
     /// Snapshot index entries, in order.
     pub async fn snapshots(&self, id: &str) -> Result<Vec<SnapshotInfo>, StoreError> {
-        let rows = sqlx::query("SELECT idx, time, fields, data FROM snapshots WHERE job_id = ? ORDER BY idx")
-            .bind(id)
-            .fetch_all(&self.pool)
-            .await?;
+        let rows = sqlx::query(
+            "SELECT idx, time, fields, data FROM snapshots WHERE job_id = ? ORDER BY idx",
+        )
+        .bind(id)
+        .fetch_all(&self.pool)
+        .await?;
         let mut out = Vec::with_capacity(rows.len());
         for r in rows {
             let idx: i64 = r.try_get("idx")?;

@@ -45,7 +45,10 @@ async fn call(st: &AppState, req: Request<Body>) -> (StatusCode, Value) {
     let resp = app(st.clone()).oneshot(req).await.unwrap();
     let status = resp.status();
     let bytes = resp.into_body().collect().await.unwrap().to_bytes();
-    (status, serde_json::from_slice(&bytes).unwrap_or(Value::Null))
+    (
+        status,
+        serde_json::from_slice(&bytes).unwrap_or(Value::Null),
+    )
 }
 
 fn post(uri: &str, body: impl Into<Body>, token: Option<&str>) -> Request<Body> {
@@ -88,10 +91,26 @@ async fn invalid_scene_is_422_with_paths() {
 
     let mut sc = scene();
     sc["grid"]["typo"] = json!(1);
-    let (s, v) = call(&st, post("/api/v1/jobs", json!({"scene": sc}).to_string(), None)).await;
+    let (s, v) = call(
+        &st,
+        post("/api/v1/jobs", json!({"scene": sc}).to_string(), None),
+    )
+    .await;
     assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY);
-    assert!(v["details"][0]["path"].as_str().unwrap().starts_with("grid"), "{v}");
-    assert!(v["details"][0]["message"].as_str().unwrap().contains("typo"), "{v}");
+    assert!(
+        v["details"][0]["path"]
+            .as_str()
+            .unwrap()
+            .starts_with("grid"),
+        "{v}"
+    );
+    assert!(
+        v["details"][0]["message"]
+            .as_str()
+            .unwrap()
+            .contains("typo"),
+        "{v}"
+    );
     assert_eq!(st.store.count_all().await.unwrap(), 0);
 }
 
@@ -130,7 +149,11 @@ async fn tokens_are_required_where_configured() {
     assert_eq!(s, StatusCode::OK);
     assert_eq!(v.as_array().unwrap().len(), 1);
     // Worker routes need the worker token.
-    let (s, _) = call(&st, post("/api/v1/worker/claim", "{\"worker_id\":\"w\"}", Some("tok"))).await;
+    let (s, _) = call(
+        &st,
+        post("/api/v1/worker/claim", "{\"worker_id\":\"w\"}", Some("tok")),
+    )
+    .await;
     assert_eq!(s, StatusCode::UNAUTHORIZED);
 }
 
@@ -164,7 +187,11 @@ async fn claim_fence_and_finish() {
     let id = job["id"].as_str().unwrap().to_string();
     let (s, c) = call(
         &st,
-        post("/api/v1/worker/claim", "{\"worker_id\":\"w1\",\"wait_seconds\":0}", Some("wt")),
+        post(
+            "/api/v1/worker/claim",
+            "{\"worker_id\":\"w1\",\"wait_seconds\":0}",
+            Some("wt"),
+        ),
     )
     .await;
     assert_eq!(s, StatusCode::OK);
@@ -172,26 +199,50 @@ async fn claim_fence_and_finish() {
     let fence = c["fence"].as_i64().unwrap();
     // Nothing else to claim.
     let resp = app(st.clone())
-        .oneshot(post("/api/v1/worker/claim", "{\"worker_id\":\"w2\",\"wait_seconds\":0}", Some("wt")))
+        .oneshot(post(
+            "/api/v1/worker/claim",
+            "{\"worker_id\":\"w2\",\"wait_seconds\":0}",
+            Some("wt"),
+        ))
         .await
         .unwrap();
     assert_eq!(resp.status(), StatusCode::NO_CONTENT);
     // A stale fence is refused.
     let rows = json!({"fence": fence + 7, "rows": [{"time": 0.0, "kinetic": 1.0, "strain": null,
         "external_work": 0.0, "dissipated": 0.0, "total_error": 0.0}]});
-    let (s, v) = call(&st, post(&format!("/api/v1/worker/jobs/{id}/energy"), rows.to_string(), Some("wt"))).await;
+    let (s, v) = call(
+        &st,
+        post(
+            &format!("/api/v1/worker/jobs/{id}/energy"),
+            rows.to_string(),
+            Some("wt"),
+        ),
+    )
+    .await;
     assert_eq!(s, StatusCode::CONFLICT);
     assert_error_body(&v, "conflict");
     let mut rows = rows;
     rows["fence"] = json!(fence);
-    let (s, _) = call(&st, post(&format!("/api/v1/worker/jobs/{id}/energy"), rows.to_string(), Some("wt"))).await;
+    let (s, _) = call(
+        &st,
+        post(
+            &format!("/api/v1/worker/jobs/{id}/energy"),
+            rows.to_string(),
+            Some("wt"),
+        ),
+    )
+    .await;
     assert_eq!(s, StatusCode::NO_CONTENT);
     // Cancel reaches the heartbeat.
     let (s, _) = call(&st, post(&format!("/api/v1/jobs/{id}/cancel"), "", None)).await;
     assert_eq!(s, StatusCode::OK);
     let (s, hb) = call(
         &st,
-        post(&format!("/api/v1/worker/jobs/{id}/heartbeat"), json!({"fence": fence}).to_string(), Some("wt")),
+        post(
+            &format!("/api/v1/worker/jobs/{id}/heartbeat"),
+            json!({"fence": fence}).to_string(),
+            Some("wt"),
+        ),
     )
     .await;
     assert_eq!(s, StatusCode::OK);
@@ -200,7 +251,13 @@ async fn claim_fence_and_finish() {
     assert_eq!(e.as_array().unwrap().len(), 1);
     assert!(e[0]["strain"].is_null(), "NaN travels as null: {e}");
     // Running jobs cannot be deleted.
-    let (s, v) = call(&st, Request::delete(format!("/api/v1/jobs/{id}")).body(Body::empty()).unwrap()).await;
+    let (s, v) = call(
+        &st,
+        Request::delete(format!("/api/v1/jobs/{id}"))
+            .body(Body::empty())
+            .unwrap(),
+    )
+    .await;
     assert_eq!(s, StatusCode::CONFLICT, "{v}");
 }
 

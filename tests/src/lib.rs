@@ -32,7 +32,11 @@ pub fn fracture_bin() -> PathBuf {
                 }
                 let _ = cmd.status();
             }
-            assert!(bin.exists(), "{} is not built: cargo build -p fracture-server", bin.display());
+            assert!(
+                bin.exists(),
+                "{} is not built: cargo build -p fracture-server",
+                bin.display()
+            );
             bin
         })
         .clone()
@@ -105,7 +109,11 @@ impl Server {
                 self.url = format!("http://{}", a.trim());
                 break;
             }
-            assert!(t0.elapsed() < Duration::from_secs(30), "server did not start; see {}", self.data.join("server.log").display());
+            assert!(
+                t0.elapsed() < Duration::from_secs(30),
+                "server did not start; see {}",
+                self.data.join("server.log").display()
+            );
             std::thread::sleep(Duration::from_millis(50));
         }
     }
@@ -119,7 +127,10 @@ impl Server {
     pub fn stop(&mut self) -> std::time::Duration {
         let t0 = Instant::now();
         if let Some(mut c) = self.child.take() {
-            let _ = Command::new("kill").arg("-TERM").arg(c.id().to_string()).status();
+            let _ = Command::new("kill")
+                .arg("-TERM")
+                .arg(c.id().to_string())
+                .status();
             loop {
                 if let Ok(Some(_)) = c.try_wait() {
                     break;
@@ -155,7 +166,12 @@ impl Server {
 
     /// POST JSON, returning status and body.
     pub fn post_json(&self, path: &str, body: &Value) -> (u16, Value) {
-        let r = self.http.post(self.at(path)).json(body).send().expect("POST");
+        let r = self
+            .http
+            .post(self.at(path))
+            .json(body)
+            .send()
+            .expect("POST");
         let s = r.status().as_u16();
         (s, r.json().unwrap_or(Value::Null))
     }
@@ -180,7 +196,10 @@ impl Server {
             if pred(&j) {
                 return j;
             }
-            assert!(t0.elapsed() < timeout, "job {id} did not reach the state in {timeout:?}: {j}");
+            assert!(
+                t0.elapsed() < timeout,
+                "job {id} did not reach the state in {timeout:?}: {j}"
+            );
             std::thread::sleep(Duration::from_millis(50));
         }
     }
@@ -188,7 +207,10 @@ impl Server {
     /// Wait until the job has ended.
     pub fn wait_done(&self, id: &str, timeout: Duration) -> Value {
         self.wait_for(id, timeout, |j| {
-            matches!(j["status"].as_str(), Some("completed" | "failed" | "cancelled"))
+            matches!(
+                j["status"].as_str(),
+                Some("completed" | "failed" | "cancelled")
+            )
         })
     }
 }
@@ -197,7 +219,10 @@ impl Drop for Server {
     fn drop(&mut self) {
         if let Some(mut c) = self.child.take() {
             // Graceful first so local workers are stopped by their server.
-            let _ = Command::new("kill").arg("-TERM").arg(c.id().to_string()).status();
+            let _ = Command::new("kill")
+                .arg("-TERM")
+                .arg(c.id().to_string())
+                .status();
             let t0 = Instant::now();
             while t0.elapsed() < Duration::from_secs(10) {
                 if let Ok(Some(_)) = c.try_wait() {

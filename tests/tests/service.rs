@@ -19,9 +19,15 @@ fn status(j: &Value) -> &str {
 fn assert_no_duplicates(s: &Server, id: &str) -> (usize, usize, usize) {
     let e = s.get_json(&format!("/api/v1/jobs/{id}/energy"));
     let e = e.as_array().expect("energy array");
-    let times: Vec<f64> = e.iter().map(|r| r["time"].as_f64().unwrap_or(f64::NAN)).collect();
+    let times: Vec<f64> = e
+        .iter()
+        .map(|r| r["time"].as_f64().unwrap_or(f64::NAN))
+        .collect();
     for w in times.windows(2) {
-        assert!(w[1] > w[0], "energy rows of {id} repeat or go back in time: {w:?}");
+        assert!(
+            w[1] > w[0],
+            "energy rows of {id} repeat or go back in time: {w:?}"
+        );
     }
     let c = s.get_json(&format!("/api/v1/jobs/{id}/crack-tips"));
     let c = c.as_array().expect("crack-tip array");
@@ -37,7 +43,11 @@ fn assert_no_duplicates(s: &Server, id: &str) -> (usize, usize, usize) {
     let snaps = s.get_json(&format!("/api/v1/jobs/{id}/snapshots"));
     let snaps = snaps.as_array().expect("snapshot array");
     for (k, sn) in snaps.iter().enumerate() {
-        assert_eq!(sn["index"].as_u64(), Some(k as u64), "snapshot indices of {id}: {snaps:?}");
+        assert_eq!(
+            sn["index"].as_u64(),
+            Some(k as u64),
+            "snapshot indices of {id}: {snaps:?}"
+        );
     }
     (e.len(), c.len(), snaps.len())
 }
@@ -63,8 +73,8 @@ fn read_events(s: &Server, id: &str, timeout: Duration) -> Vec<(String, Value)> 
             data.push_str(d.trim_start());
         } else if line.is_empty() && !ev.is_empty() {
             let v: Value = serde_json::from_str(&data).unwrap_or(Value::Null);
-            let terminal = ev == "status"
-                && matches!(status(&v), "completed" | "failed" | "cancelled");
+            let terminal =
+                ev == "status" && matches!(status(&v), "completed" | "failed" | "cancelled");
             out.push((std::mem::take(&mut ev), v));
             data.clear();
             if terminal {
@@ -84,7 +94,8 @@ fn job_lifecycle_results_readable_while_running_and_after() {
     assert_eq!(health["workers"], 1);
 
     // Long enough to be seen running: 30×15 cells (1800 particles), 4000 steps (≈ 2 s), 6 snapshots.
-    let id = s.submit(&json!({"scene": scene("lifecycle", 30, 15, 4000, 6), "labels": {"suite": "e2e"}}));
+    let id = s
+        .submit(&json!({"scene": scene("lifecycle", 30, 15, 4000, 6), "labels": {"suite": "e2e"}}));
     let events = std::thread::scope(|sc| {
         let ev = sc.spawn(|| read_events(&s, &id, LONG));
         // While it runs, every route answers.
@@ -103,7 +114,10 @@ fn job_lifecycle_results_readable_while_running_and_after() {
                     if let Some(first) = snaps.as_array().and_then(|a| a.first()) {
                         let r = s
                             .http
-                            .get(s.at(&format!("/api/v1/jobs/{id}/snapshots/{}/sxx.png", first["index"])))
+                            .get(s.at(&format!(
+                                "/api/v1/jobs/{id}/snapshots/{}/sxx.png",
+                                first["index"]
+                            )))
                             .send()
                             .expect("png");
                         assert_eq!(r.status().as_u16(), 200);
@@ -139,7 +153,10 @@ fn job_lifecycle_results_readable_while_running_and_after() {
     assert_eq!(status(d), "completed");
 
     let (ne, nc, ns) = assert_no_duplicates(&s, &id);
-    assert!(ne > 0 && nc > 0 && ns > 0, "rows: energy {ne}, crack tips {nc}, snapshots {ns}");
+    assert!(
+        ne > 0 && nc > 0 && ns > 0,
+        "rows: energy {ne}, crack tips {nc}, snapshots {ns}"
+    );
 
     // CSV forms.
     let csv = s
@@ -164,7 +181,11 @@ fn job_lifecycle_results_readable_while_running_and_after() {
 
     // Images of every recorded component and kind.
     let snaps = s.get_json(&format!("/api/v1/jobs/{id}/snapshots"));
-    let last = snaps.as_array().and_then(|a| a.last()).expect("a snapshot").clone();
+    let last = snaps
+        .as_array()
+        .and_then(|a| a.last())
+        .expect("a snapshot")
+        .clone();
     let mut names: Vec<String> = last["components"]
         .as_array()
         .expect("components")
@@ -175,7 +196,10 @@ fn job_lifecycle_results_readable_while_running_and_after() {
     for f in &names {
         let r = s
             .http
-            .get(s.at(&format!("/api/v1/jobs/{id}/snapshots/{}/{f}.png", last["index"])))
+            .get(s.at(&format!(
+                "/api/v1/jobs/{id}/snapshots/{}/{f}.png",
+                last["index"]
+            )))
             .send()
             .expect("png");
         assert_eq!(r.status().as_u16(), 200, "{f}.png");
@@ -185,7 +209,10 @@ fn job_lifecycle_results_readable_while_running_and_after() {
     }
     let r = s
         .http
-        .get(s.at(&format!("/api/v1/jobs/{id}/snapshots/{}/nonsense.png", last["index"])))
+        .get(s.at(&format!(
+            "/api/v1/jobs/{id}/snapshots/{}/nonsense.png",
+            last["index"]
+        )))
         .send()
         .expect("png");
     assert_eq!(r.status().as_u16(), 404);
@@ -198,7 +225,9 @@ fn job_lifecycle_results_readable_while_running_and_after() {
         .expect("mcap")
         .bytes()
         .expect("bytes");
-    let summary = mcap::Summary::read(&bytes).expect("mcap summary").expect("has summary");
+    let summary = mcap::Summary::read(&bytes)
+        .expect("mcap summary")
+        .expect("has summary");
     assert!(!summary.channels.is_empty());
     let mut messages = 0;
     for m in mcap::MessageStream::new(&bytes).expect("mcap stream") {
@@ -217,10 +246,18 @@ fn job_lifecycle_results_readable_while_running_and_after() {
     assert_eq!(l.as_array().map(Vec::len), Some(0));
 
     // Delete removes the job and its files.
-    let r = s.http.delete(s.at(&format!("/api/v1/jobs/{id}"))).send().expect("delete");
+    let r = s
+        .http
+        .delete(s.at(&format!("/api/v1/jobs/{id}")))
+        .send()
+        .expect("delete");
     assert_eq!(r.status().as_u16(), 204);
     assert!(!dir.path().join("jobs").join(&id).exists());
-    let r = s.http.get(s.at(&format!("/api/v1/jobs/{id}"))).send().expect("get");
+    let r = s
+        .http
+        .get(s.at(&format!("/api/v1/jobs/{id}")))
+        .send()
+        .expect("get");
     assert_eq!(r.status().as_u16(), 404);
 }
 
@@ -233,10 +270,22 @@ fn killed_worker_job_is_rerun_by_another_without_duplicates() {
         status(j) == "running" && j["progress"]["step"].as_u64().unwrap_or(0) > 0
             || matches!(status(j), "completed" | "failed")
     });
-    assert_eq!(status(&j), "running", "the job ended before the kill: make the scene longer");
+    assert_eq!(
+        status(&j),
+        "running",
+        "the job ended before the kill: make the scene longer"
+    );
     let worker = j["worker"].as_str().expect("worker id").to_string();
-    let pid: u32 = worker.rsplit('-').nth(1).and_then(|p| p.parse().ok()).expect("pid in worker id");
-    let ok = Command::new("kill").arg("-9").arg(pid.to_string()).status().expect("kill");
+    let pid: u32 = worker
+        .rsplit('-')
+        .nth(1)
+        .and_then(|p| p.parse().ok())
+        .expect("pid in worker id");
+    let ok = Command::new("kill")
+        .arg("-9")
+        .arg(pid.to_string())
+        .status()
+        .expect("kill");
     assert!(ok.success());
     let j = s.wait_done(&id, LONG);
     assert_eq!(status(&j), "completed", "{j}");
@@ -278,7 +327,10 @@ fn server_restart_with_jobs_queued_and_running_loses_nothing() {
         t0.elapsed()
     };
     sse.join().expect("sse thread");
-    assert!(stopped_in < Duration::from_secs(15), "restart took {stopped_in:?}");
+    assert!(
+        stopped_in < Duration::from_secs(15),
+        "restart took {stopped_in:?}"
+    );
     for id in &ids {
         let j = s.wait_done(id, LONG);
         assert_eq!(status(&j), "completed", "{j}");
@@ -317,7 +369,12 @@ fn fifty_concurrent_jobs_complete_each_exactly_once() {
     let h = s.get_json("/api/v1/health");
     assert_eq!(h["queued"], 0);
     assert_eq!(h["running"], 0);
-    assert_eq!(s.get_json("/api/v1/jobs?limit=500").as_array().map(Vec::len), Some(50));
+    assert_eq!(
+        s.get_json("/api/v1/jobs?limit=500")
+            .as_array()
+            .map(Vec::len),
+        Some(50)
+    );
 }
 
 #[test]
@@ -352,7 +409,16 @@ fn bad_input_gets_status_and_helpful_body_and_stores_nothing() {
     let dir = tempfile::tempdir().expect("tmp");
     let s = Server::start(
         dir.path(),
-        &["--workers", "1", "--token", "s3cret", "--max-particles", "1000", "--max-body-bytes", "65536"],
+        &[
+            "--workers",
+            "1",
+            "--token",
+            "s3cret",
+            "--max-particles",
+            "1000",
+            "--max-body-bytes",
+            "65536",
+        ],
     );
     let post = |body: reqwest::blocking::Body, token: Option<&str>| {
         let mut r = s
@@ -379,7 +445,13 @@ fn bad_input_gets_status_and_helpful_body_and_stores_nothing() {
     unknown["colour"] = json!("red");
     let (c, v) = post(unknown.to_string().into(), good);
     assert_eq!(c, 422, "{v}");
-    assert!(v["details"][0]["message"].as_str().unwrap_or("").contains("colour"), "{v}");
+    assert!(
+        v["details"][0]["message"]
+            .as_str()
+            .unwrap_or("")
+            .contains("colour"),
+        "{v}"
+    );
 
     let mut bad = ok.clone();
     bad["materials"]["homalite"]["poissons_ratio"] = json!(0.7);
@@ -387,7 +459,11 @@ fn bad_input_gets_status_and_helpful_body_and_stores_nothing() {
     assert_eq!(c, 422, "{v}");
     assert_eq!(v["error"], "invalid_scene");
     assert!(
-        v["details"].as_array().expect("details").iter().any(|d| d["path"] == "materials.homalite.poissons_ratio"),
+        v["details"]
+            .as_array()
+            .expect("details")
+            .iter()
+            .any(|d| d["path"] == "materials.homalite.poissons_ratio"),
         "{v}"
     );
 
@@ -400,7 +476,13 @@ fn bad_input_gets_status_and_helpful_body_and_stores_nothing() {
     let (c, v) = post(scene("too-many", 40, 20, 50, 0).to_string().into(), good);
     assert_eq!(c, 422, "{v}");
     assert_eq!(v["error"], "limit_exceeded");
-    assert!(v["message"].as_str().unwrap_or("").contains("max_particles"), "{v}");
+    assert!(
+        v["message"]
+            .as_str()
+            .unwrap_or("")
+            .contains("max_particles"),
+        "{v}"
+    );
 
     let (c, v) = post(ok.to_string().into(), Some("wrong"));
     assert_eq!(c, 401, "{v}");
@@ -418,7 +500,13 @@ fn bad_input_gets_status_and_helpful_body_and_stores_nothing() {
 
     // Nothing stored.
     assert_eq!(s.get_json("/api/v1/jobs").as_array().map(Vec::len), Some(0));
-    assert!(!dir.path().join("jobs").exists() || std::fs::read_dir(dir.path().join("jobs")).map(|d| d.count()).unwrap_or(0) == 0);
+    assert!(
+        !dir.path().join("jobs").exists()
+            || std::fs::read_dir(dir.path().join("jobs"))
+                .map(|d| d.count())
+                .unwrap_or(0)
+                == 0
+    );
 
     // Unknown ids, read-only routes without a token.
     let r = s.http.get(s.at("/api/v1/jobs/nope")).send().expect("get");
@@ -444,7 +532,13 @@ fn submit_command_waits_and_exits_with_the_outcome() {
     let scene_file = dir.path().join("scene.json");
     std::fs::write(&scene_file, tiny_scene("cli", 200, 2).to_string()).expect("write");
     let out = Command::new(fracture_bin())
-        .args(["submit", scene_file.to_str().expect("path"), "--server", &s.url, "--wait"])
+        .args([
+            "submit",
+            scene_file.to_str().expect("path"),
+            "--server",
+            &s.url,
+            "--wait",
+        ])
         .output()
         .expect("run submit");
     assert!(out.status.success(), "submit --wait: {out:?}");
@@ -455,19 +549,40 @@ fn submit_command_waits_and_exits_with_the_outcome() {
     bad["time"]["cfl"] = json!(3.0);
     std::fs::write(&scene_file, bad.to_string()).expect("write");
     let out = Command::new(fracture_bin())
-        .args(["submit", scene_file.to_str().expect("path"), "--server", &s.url])
+        .args([
+            "submit",
+            scene_file.to_str().expect("path"),
+            "--server",
+            &s.url,
+        ])
         .output()
         .expect("run submit");
     assert_eq!(out.status.code(), Some(2), "{out:?}");
-    assert!(String::from_utf8_lossy(&out.stderr).contains("time.cfl"), "{out:?}");
+    assert!(
+        String::from_utf8_lossy(&out.stderr).contains("time.cfl"),
+        "{out:?}"
+    );
 
     // Service pages.
-    for p in ["/", "/api/v1/openapi.json", "/api/v1/docs/", "/api/v1/scenes"] {
+    for p in [
+        "/",
+        "/api/v1/openapi.json",
+        "/api/v1/docs/",
+        "/api/v1/scenes",
+    ] {
         let r = s.http.get(s.at(p)).send().expect("get");
         assert_eq!(r.status().as_u16(), 200, "{p}");
     }
     let api = s.get_json("/api/v1/openapi.json");
-    for p in ["/api/v1/jobs", "/api/v1/jobs/{id}/events", "/api/v1/scenes/validate", "/api/v1/health"] {
-        assert!(api["paths"][p].is_object(), "{p} missing from the OpenAPI document");
+    for p in [
+        "/api/v1/jobs",
+        "/api/v1/jobs/{id}/events",
+        "/api/v1/scenes/validate",
+        "/api/v1/health",
+    ] {
+        assert!(
+            api["paths"][p].is_object(),
+            "{p} missing from the OpenAPI document"
+        );
     }
 }
