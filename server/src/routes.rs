@@ -599,6 +599,7 @@ async fn job_events(
     State(st): State<AppState>,
     Path(id): Path<String>,
 ) -> Result<Sse<impl Stream<Item = Result<Event, Infallible>>>, ApiError> {
+    job_or_404(&st, &id).await?;
     // Subscribe before reading the state so no change falls between the two.
     let rx = st.hub.subscribe(&id);
     let job = job_or_404(&st, &id).await?;
