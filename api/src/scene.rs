@@ -449,7 +449,9 @@ fn default_cfl() -> f64 {
 }
 
 /// A field that can be recorded in snapshots.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, PartialOrd, Ord, Serialize, Deserialize, JsonSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum FieldKind {
     /// σ_xx, σ_yy, σ_xy (Pa).

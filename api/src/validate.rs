@@ -197,11 +197,16 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
     let g = &scene.grid;
     let h = g.cell_size;
     c.positive("grid.cell_size", h);
-    let grid_ok = c.point("grid.min", g.min) & c.point("grid.max", g.max) && h.is_finite() && h > 0.0;
+    let grid_ok =
+        c.point("grid.min", g.min) & c.point("grid.max", g.max) && h.is_finite() && h > 0.0;
     let mut grid_nodes = 0u64;
     if grid_ok {
         if g.max[0] <= g.min[0] || g.max[1] <= g.min[1] {
-            c.err("grid.max", g.max, format!("must be above and to the right of grid.min {:?}", g.min));
+            c.err(
+                "grid.max",
+                g.max,
+                format!("must be above and to the right of grid.min {:?}", g.min),
+            );
         } else {
             let nx = ((g.max[0] - g.min[0]) / h - 1e-9).ceil() as u64 + 1;
             let ny = ((g.max[1] - g.min[1]) / h - 1e-9).ceil() as u64 + 1;
@@ -218,7 +223,11 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
 
     // Materials.
     if scene.materials.is_empty() {
-        c.err("materials", serde_json::json!({}), "must define at least one material");
+        c.err(
+            "materials",
+            serde_json::json!({}),
+            "must define at least one material",
+        );
     }
     for (name, m) in &scene.materials {
         let p = format!("materials.{name}");
@@ -240,7 +249,11 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
 
     // Bodies: region inside the grid (with the empty cell layer GIMP needs), known material.
     if scene.bodies.is_empty() {
-        c.err("bodies", serde_json::json!([]), "must contain at least one body");
+        c.err(
+            "bodies",
+            serde_json::json!([]),
+            "must contain at least one body",
+        );
     }
     let mut regions_ok = true;
     for (i, b) in scene.bodies.iter().enumerate() {
@@ -254,7 +267,11 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
             );
         }
         if b.particles_per_cell == 0 || b.particles_per_cell > 8 {
-            c.err(format!("{p}.particles_per_cell"), b.particles_per_cell, "is outside 1..=8");
+            c.err(
+                format!("{p}.particles_per_cell"),
+                b.particles_per_cell,
+                "is outside 1..=8",
+            );
             regions_ok = false;
         }
         c.point(&format!("{p}.initial_velocity"), b.initial_velocity);
@@ -309,12 +326,19 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
     for (i, cr) in scene.cracks.iter().enumerate() {
         let p = format!("cracks.{i}");
         if cr.points.len() < 2 {
-            c.err(format!("{p}.points"), &cr.points, "needs at least two points");
+            c.err(
+                format!("{p}.points"),
+                &cr.points,
+                "needs at least two points",
+            );
         }
         let mut pts_ok = true;
         for (k, q) in cr.points.iter().enumerate() {
             pts_ok &= c.point(&format!("{p}.points.{k}"), *q);
-            if grid_ok && pts_ok && (q[0] < g.min[0] || q[0] > g.max[0] || q[1] < g.min[1] || q[1] > g.max[1]) {
+            if grid_ok
+                && pts_ok
+                && (q[0] < g.min[0] || q[0] > g.max[0] || q[1] < g.min[1] || q[1] > g.max[1])
+            {
                 c.err(format!("{p}.points.{k}"), q, "lies outside the grid box");
             }
         }
@@ -322,17 +346,30 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
             for k in 1..cr.points.len() {
                 let (a, b) = (cr.points[k - 1], cr.points[k]);
                 if (a[0] - b[0]).hypot(a[1] - b[1]) <= 1e-12 * h.abs().max(1e-300) {
-                    c.err(format!("{p}.points.{k}"), b, "repeats the previous point (zero-length segment)");
+                    c.err(
+                        format!("{p}.points.{k}"),
+                        b,
+                        "repeats the previous point (zero-length segment)",
+                    );
                 }
             }
         }
         if cr.j_contour == 0 || cr.j_contour > 16 {
-            c.err(format!("{p}.j_contour"), cr.j_contour, "is outside 1..=16 cells");
+            c.err(
+                format!("{p}.j_contour"),
+                cr.j_contour,
+                "is outside 1..=16 cells",
+            );
         }
         if let ContactLaw::Coulomb { friction } = cr.contact {
             c.non_negative(&format!("{p}.contact.friction"), friction);
         }
-        if let Propagation::EnergyRelease { toughness, direction, .. } = &cr.propagation {
+        if let Propagation::EnergyRelease {
+            toughness,
+            direction,
+            ..
+        } = &cr.propagation
+        {
             c.positive(&format!("{p}.propagation.toughness"), *toughness);
             if let GrowthDirection::Fixed(d) = direction {
                 let dp = format!("{p}.propagation.direction.fixed");
@@ -348,7 +385,11 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
         let p = format!("boundary_conditions.{i}");
         c.region(&format!("{p}.region"), &bc.region);
         if bc.velocity.x.is_none() && bc.velocity.y.is_none() {
-            c.err(format!("{p}.velocity"), serde_json::json!({}), "prescribes no component (give x, y or both)");
+            c.err(
+                format!("{p}.velocity"),
+                serde_json::json!({}),
+                "prescribes no component (give x, y or both)",
+            );
         }
         if let Some(v) = bc.velocity.x {
             c.finite(&format!("{p}.velocity.x"), v);
@@ -416,7 +457,11 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
     if c.errors.is_empty() {
         let s = (scene.time.end / time_step * (1.0 - 1e-12)).ceil();
         if !(s.is_finite() && s < 1e12) {
-            c.err("time.end", scene.time.end, format!("needs {s} steps of {time_step:e} s"));
+            c.err(
+                "time.end",
+                scene.time.end,
+                format!("needs {s} steps of {time_step:e} s"),
+            );
         } else {
             steps = s as u64;
         }

@@ -3,8 +3,9 @@
 //!
 //! Exit status: 0 success; 1 an output or system error (files, threads); 2 an invalid or
 //! unreadable scene (every problem on stderr with its JSON path and value); 3 a run that
-//! failed numerically (the message says at which step and where). A run keeps its partial
-//! outputs in every case.
+//! failed numerically (the message says at which step and where); 130 a run stopped with
+//! Ctrl-C (status `cancelled` in its summary). A run keeps its partial outputs in every
+//! case.
 
 // A command-line tool prints its results on stdout.
 #![allow(clippy::print_stdout)]
@@ -12,6 +13,8 @@
 use std::io::IsTerminal;
 use std::path::Path;
 use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::{Duration, Instant};
 
 use anyhow::Context;
@@ -28,6 +31,8 @@ const EXIT_ERROR: u8 = 1;
 const EXIT_INVALID: u8 = 2;
 /// Exit status of a numerical failure.
 const EXIT_FAILED: u8 = 3;
+/// Exit status of a run stopped by Ctrl-C (128 + SIGINT, as shells report it).
+const EXIT_INTERRUPTED: u8 = 130;
 
 /// Arguments of `fracture bench`.
 #[derive(clap::Args, Debug)]
@@ -107,6 +112,8 @@ struct CliSink {
     bar: Option<ProgressBar>,
     /// Writing the results failed (as opposed to the physics).
     output_failed: bool,
+    /// Set by Ctrl-C: cancel at the next progress report.
+    interrupted: Arc<AtomicBool>,
 }
 
 impl CliSink {
@@ -125,7 +132,11 @@ impl RunSink for CliSink {
             bar.set_message(format!("t = {:.3e} s", p.sim_time));
         }
         let r = self.out.progress(p);
-        self.check(r)
+        let control = self.check(r)?;
+        if self.interrupted.load(Ordering::SeqCst) {
+            return Ok(Control::Cancel);
+        }
+        Ok(control)
     }
     fn energy(&mut self, rows: &[EnergyRow]) -> Result<(), SinkError> {
         let r = self.out.energy(rows);
@@ -187,10 +198,23 @@ pub fn run(scene: &Path, out: &Path, threads: usize) -> ExitCode {
             RunOptions::default().flush_every
         },
     };
+    // Ctrl-C stops the run cleanly (summary written, status cancelled); a second one
+    // exits at once, keeping what was flushed.
+    let interrupted = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&interrupted);
+    if let Err(e) = ctrlc::set_handler(move || {
+        if flag.swap(true, Ordering::SeqCst) {
+            std::process::exit(i32::from(EXIT_INTERRUPTED));
+        }
+        eprintln!("\ninterrupted: stopping at the next report (Ctrl-C again to quit now)");
+    }) {
+        eprintln!("warning: Ctrl-C will not stop the run cleanly: {e}");
+    }
     let mut sink = CliSink {
         out: output,
         bar,
         output_failed: false,
+        interrupted,
     };
     let summary = run_scene(&scene, &opts, &mut sink);
     let message = summary.message.as_deref().unwrap_or("");
@@ -224,7 +248,7 @@ pub fn run(scene: &Path, out: &Path, threads: usize) -> ExitCode {
         RunStatus::Cancelled => {
             eprintln!("cancelled after {} steps: {message}", summary.steps);
             eprintln!("partial results in {}", out.display());
-            ExitCode::from(EXIT_ERROR)
+            ExitCode::from(EXIT_INTERRUPTED)
         }
     }
 }

@@ -52,7 +52,11 @@ fn main() -> ExitCode {
         Some(Command::Serve(a)) => fracture_server::cli::serve(a),
         Some(Command::Worker(a)) => fracture_server::cli::worker(a),
         Some(Command::Submit(a)) => fracture_server::cli::submit(a),
-        Some(Command::Run { scene, out, threads }) => local::run(&scene, &out, threads),
+        Some(Command::Run {
+            scene,
+            out,
+            threads,
+        }) => local::run(&scene, &out, threads),
         Some(Command::Validate { scene }) => local::validate(&scene),
         Some(Command::Schema) => local::schema(),
         Some(Command::Bench(a)) => local::bench(a),

@@ -335,3 +335,54 @@ fn bench_runs_ci_sized() {
     assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
     assert!(stdout(&o).contains("particle-steps/s"));
 }
+
+#[cfg(unix)]
+#[test]
+fn ctrl_c_cancels_the_run_and_writes_the_summary() {
+    use std::time::{Duration, Instant};
+    // Millions of steps: runs until interrupted.
+    let text = with(|s| s["time"]["end"] = json!(1.0));
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(dir.path(), "scene.json", &text);
+    let out = dir.path().join("out");
+    let child = Command::new(env!("CARGO_BIN_EXE_fracture"))
+        .args([
+            "run",
+            file.to_str().unwrap(),
+            "--out",
+            out.to_str().unwrap(),
+        ])
+        .stdout(std::process::Stdio::null())
+        .stderr(std::process::Stdio::piped())
+        .spawn()
+        .unwrap();
+    // Wait until rows are flushed (the run is stepping and the handler installed).
+    let start = Instant::now();
+    loop {
+        let rows = std::fs::read_to_string(out.join("energy.csv"))
+            .map(|t| t.lines().count())
+            .unwrap_or(0);
+        if rows > 2 {
+            break;
+        }
+        assert!(
+            start.elapsed() < Duration::from_secs(60),
+            "the run never started"
+        );
+        std::thread::sleep(Duration::from_millis(50));
+    }
+    let kill = Command::new("kill")
+        .args(["-INT", &child.id().to_string()])
+        .status()
+        .unwrap();
+    assert!(kill.success());
+    let o = child.wait_with_output().unwrap();
+    assert_eq!(o.status.code(), Some(130), "{}", stderr(&o));
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    assert_eq!(summary["status"], "cancelled");
+    assert!(summary["steps"].as_u64().unwrap() > 0);
+    // The MCAP file was finished properly.
+    let m = fracture_worker::mcapfile::McapContents::read(out.join("fields.mcap")).unwrap();
+    assert!(!m.truncated);
+}

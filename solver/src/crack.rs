@@ -62,6 +62,9 @@ pub struct TipState {
     pub active: bool,
     /// Total growth of this tip (m).
     pub advance: f64,
+    /// Energy released by its growth per unit thickness (J/m): Σ G·Δa over growth steps,
+    /// with G the energy release rate that triggered each step.
+    pub released: f64,
     /// (time, advance) over the last speed window.
     history: VecDeque<(f64, f64)>,
     /// The tip advanced in the last step.
@@ -87,11 +90,7 @@ pub struct Crack {
 impl Crack {
     /// Current length along the path, without the mouth extensions.
     pub fn length(&self) -> f64 {
-        let l: f64 = self
-            .pts
-            .windows(2)
-            .map(|w| dist(w[0].x, w[1].x))
-            .sum();
+        let l: f64 = self.pts.windows(2).map(|w| dist(w[0].x, w[1].x)).sum();
         l - self.ext[0] - self.ext[1]
     }
 
@@ -134,6 +133,10 @@ pub struct Cracks {
     cell_start: Vec<u32>,
     cell_segs: Vec<(u32, u32)>,
     entries: Vec<(u32, u32, i32, [f64; 2])>,
+    /// Normal contact impulse |Δp_n| of the last force-stage contact at each node (dense over
+    /// grid storage): the friction capacity of faces that are in contact but not approaching
+    /// at the extrapolation stages.
+    normal_impulse: Vec<f64>,
     ncx: usize,
     ncy: usize,
 }
@@ -239,6 +242,7 @@ impl Cracks {
             cell_start: Vec::new(),
             cell_segs: Vec::new(),
             entries: Vec::new(),
+            normal_impulse: vec![0.0; geom.storage_len()],
             ncx: geom.nx - 1,
             ncy: geom.ny - 1,
         }
@@ -379,7 +383,12 @@ impl Cracks {
                             return Err((geom.index(ix, iy), 3));
                         }
                         mask |= 1 << (3 * a + b);
-                        entries.push((geom.index(ix, iy) as u32, ci, if above { 1 } else { -1 }, n));
+                        entries.push((
+                            geom.index(ix, iy) as u32,
+                            ci,
+                            if above { 1 } else { -1 },
+                            n,
+                        ));
                     }
                 }
             }
@@ -407,7 +416,11 @@ impl Cracks {
             f1_index.push(node);
             self.slots.push(SlotInfo {
                 above_is_f1: votes >= 0,
-                normal: if l > 0.0 { [n[0] / l, n[1] / l] } else { [0.0, -1.0] },
+                normal: if l > 0.0 {
+                    [n[0] / l, n[1] / l]
+                } else {
+                    [0.0, -1.0]
+                },
                 crack,
             });
         }
@@ -447,6 +460,7 @@ impl Cracks {
             ];
             let n = info.normal;
             let dn = d[0] * n[0] + d[1] * n[1];
+            let node_index = f1_index[s] as usize;
             let law = &self.cracks[info.crack as usize].contact;
             let applied = match law {
                 ContactLaw::Stick => d,
@@ -455,22 +469,44 @@ impl Cracks {
                     let ua = [a.u[0] / a.m, a.u[1] / a.m];
                     let ub = [b.u[0] / b.m, b.u[1] / b.m];
                     let sep = (ub[0] - ua[0]) * n[0] + (ub[1] - ua[1]) * n[1];
-                    if !(sep < 0.0 && dn < 0.0) {
+                    let approaching = dn < 0.0;
+                    if stage == Stage::Forces {
+                        self.normal_impulse[node_index] =
+                            if sep < 0.0 && approaching { -dn } else { 0.0 };
+                    }
+                    let held = self.normal_impulse[node_index];
+                    let friction = match law {
+                        ContactLaw::Coulomb { friction } => *friction,
+                        _ => 0.0,
+                    };
+                    // In contact: overlapping and approaching; or, for friction at the
+                    // extrapolation stages, overlapping and still pressed by the normal force
+                    // of the last force stage (a static contact does not approach).
+                    let pressed = stage != Stage::Forces && friction > 0.0 && held > 0.0;
+                    if !(sep < 0.0 && (approaching || pressed)) {
                         continue;
                     }
-                    let normal = [dn * n[0], dn * n[1]];
-                    match law {
-                        ContactLaw::Coulomb { friction } => {
-                            let t = [d[0] - normal[0], d[1] - normal[1]];
-                            let tl = norm(t);
-                            let limit = friction * (-dn);
-                            if tl > limit {
-                                [normal[0] + limit * t[0] / tl, normal[1] + limit * t[1] / tl]
-                            } else {
-                                d
-                            }
+                    let normal = if approaching {
+                        [dn * n[0], dn * n[1]]
+                    } else {
+                        [0.0, 0.0]
+                    };
+                    if friction > 0.0 {
+                        let t = [d[0] - dn * n[0], d[1] - dn * n[1]];
+                        let tl = norm(t);
+                        let capacity = if stage == Stage::Forces {
+                            -dn
+                        } else {
+                            held.max(-dn)
+                        };
+                        let limit = friction * capacity.max(0.0);
+                        if tl > limit {
+                            [normal[0] + limit * t[0] / tl, normal[1] + limit * t[1] / tl]
+                        } else {
+                            [normal[0] + t[0], normal[1] + t[1]]
                         }
-                        _ => normal,
+                    } else {
+                        normal
                     }
                 }
             };
@@ -512,6 +548,7 @@ impl Cracks {
 
     /// The field of node `index` on the same side as `from` (a point just off the crack):
     /// field 0 when the line from → node does not cross a crack, field 1 when it does.
+    #[allow(clippy::too_many_arguments)]
     fn side_node<'n>(
         &self,
         geom: &GridGeom,
@@ -622,7 +659,10 @@ impl Cracks {
                 } else {
                     p.above = [p.above[0] + dt * va[0], p.above[1] + dt * va[1]];
                     p.below = [p.below[0] + dt * vb[0], p.below[1] + dt * vb[1]];
-                    p.x = [0.5 * (p.above[0] + p.below[0]), 0.5 * (p.above[1] + p.below[1])];
+                    p.x = [
+                        0.5 * (p.above[0] + p.below[0]),
+                        0.5 * (p.above[1] + p.below[1]),
+                    ];
                 }
             }
         }
@@ -662,6 +702,9 @@ impl View<'_> {
         }
     }
 }
+
+/// One edge of the J contour: from node, to node, outward normal.
+type ContourEdge = ((usize, usize), (usize, usize), [f64; 2]);
 
 /// J of one tip with what K needs.
 #[derive(Debug, Clone, Copy, Default)]
@@ -725,7 +768,7 @@ impl Cracks {
             }
             let m = p.mech[i];
             let s = p.stress[i];
-            let gu = p.cold[i].grad_u;
+            let gu = p.grad_u[i];
             let rho = m.m / m.vol;
             let ke = 0.5 * rho * (k.v[0] * k.v[0] + k.v[1] * k.v[1]);
             let pv = [s[0], s[1], s[2], gu[0], gu[1], gu[2], gu[3], m.w, ke];
@@ -804,7 +847,7 @@ impl Cracks {
         // Walk the square counter-clockwise: bottom, right, top, left edges.
         let (cx0, cx1) = ((c0 - n) as usize, (c0 + n) as usize);
         let (cy0, cy1) = ((r0 - n) as usize, (r0 + n) as usize);
-        let mut edges: Vec<((usize, usize), (usize, usize), [f64; 2])> = Vec::new();
+        let mut edges: Vec<ContourEdge> = Vec::new();
         for ix in cx0..cx1 {
             edges.push(((ix, cy0), (ix + 1, cy0), [0.0, -1.0]));
         }
@@ -896,7 +939,10 @@ impl Cracks {
         } else {
             sub(p.below, p.above)
         };
-        [cod[0] * e2[0] + cod[1] * e2[1], cod[0] * e1[0] + cod[1] * e1[1]]
+        [
+            cod[0] * e2[0] + cod[1] * e2[1],
+            cod[0] * e1[0] + cod[1] * e1[1],
+        ]
     }
 
     /// Crack-tip rows now.
@@ -992,7 +1038,10 @@ impl Cracks {
                     GrowthDirection::MaxEnergyRelease => {
                         let th = j2.atan2(j1);
                         let (s, co) = th.sin_cos();
-                        (j1.hypot(j2), [co * e1[0] + s * e2[0], co * e1[1] + s * e2[1]])
+                        (
+                            j1.hypot(j2),
+                            [co * e1[0] + s * e2[0], co * e1[1] + s * e2[1]],
+                        )
                     }
                     GrowthDirection::Fixed(d) => {
                         let l = norm(d).max(1e-300);
@@ -1043,6 +1092,7 @@ impl Cracks {
                     c.pts.push(CrackPoint::at(new));
                 }
                 c.tips[t].advance += step_len;
+                c.tips[t].released += g * step_len;
                 c.tips[t].grew = true;
                 c.tips[t].cached_j = None;
                 any = true;

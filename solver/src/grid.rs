@@ -29,6 +29,11 @@ pub struct Node {
     pub q: [f64; 2],
     /// Mass-weighted particle displacement Σ S m (x − X), for crack contact.
     pub u: [f64; 2],
+    /// Velocity of the current gather (p/m, then q/m), 0 on empty nodes: computed once per
+    /// node so the particle loops never divide by a nodal mass.
+    pub v: [f64; 2],
+    /// Acceleration f/m after the force stage, 0 on empty nodes.
+    pub a: [f64; 2],
 }
 
 /// Geometry of the grid.
@@ -38,6 +43,8 @@ pub struct GridGeom {
     pub origin: [f64; 2],
     /// Cell size h.
     pub h: f64,
+    /// 1/h.
+    pub inv_h: f64,
     /// Nodes in x.
     pub nx: usize,
     /// Nodes in y.
@@ -58,6 +65,7 @@ impl GridGeom {
         GridGeom {
             origin: min,
             h,
+            inv_h: 1.0 / h,
             nx,
             ny,
             strips,
@@ -86,8 +94,8 @@ impl GridGeom {
     #[inline(always)]
     pub fn xi(&self, x: [f64; 2]) -> [f64; 2] {
         [
-            (x[0] - self.origin[0]) / self.h,
-            (x[1] - self.origin[1]) / self.h,
+            (x[0] - self.origin[0]) * self.inv_h,
+            (x[1] - self.origin[1]) * self.inv_h,
         ]
     }
     /// Cell (column, row) containing x (may be out of range).
@@ -151,6 +159,39 @@ impl<'a> GridMut<'a> {
         } else {
             let slot = slot_of[index] as usize;
             &mut self.f1[slot - self.f1_base]
+        }
+    }
+}
+
+/// Visit the 3×3 stencil of a particle with weights `w`: `f(a, b, node)` for each pair, the
+/// node taken from the pair's velocity field. Pairs all in field 0 (every pair of a scene
+/// without cracks) take a fast path over contiguous column slices.
+#[inline(always)]
+pub fn visit_stencil(
+    g: &mut GridMut<'_>,
+    geom: &GridGeom,
+    w: &crate::shape::Weights2,
+    mask: u16,
+    slot_of: &[u32],
+    mut f: impl FnMut(usize, usize, &mut Node),
+) {
+    let by = w.y.base as usize;
+    for a in 0..3 {
+        if w.x.s[a] == 0.0 && w.x.ds[a] == 0.0 {
+            continue;
+        }
+        let start = geom.index((w.x.base + a as i32) as usize, by);
+        if mask & (0b111 << (3 * a)) == 0 {
+            let s0 = start - g.base;
+            let col = &mut g.nodes[s0..s0 + 3];
+            for (b, n) in col.iter_mut().enumerate() {
+                f(a, b, n);
+            }
+        } else {
+            for b in 0..3 {
+                let field = ((mask >> (3 * a + b)) & 1) as u8;
+                f(a, b, g.node(start + b, field, slot_of));
+            }
         }
     }
 }

@@ -67,7 +67,6 @@ impl Elastic {
         s[1] += self.c12 * exx + self.c11 * eyy;
         s[2] += self.c66 * gxy;
         s[3] += self.cz * (exx + eyy);
-        let dw = 0.5 * ((old[0] + s[0]) * exx + (old[1] + s[1]) * eyy + (old[2] + s[2]) * gxy);
-        dw
+        0.5 * ((old[0] + s[0]) * exx + (old[1] + s[1]) * eyy + (old[2] + s[2]) * gxy)
     }
 }

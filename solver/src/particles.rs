@@ -33,8 +33,6 @@ pub struct Mech {
 pub struct Cold {
     /// Initial position (m), for displacements.
     pub x0: [f64; 2],
-    /// Displacement gradient (∂ux/∂x, ∂ux/∂y, ∂uy/∂x, ∂uy/∂y), accumulated as Σ L·Δt.
-    pub grad_u: [f64; 4],
     /// Index of the particle in creation order (stable across re-sorting).
     pub id: u32,
     /// Body index.
@@ -54,6 +52,9 @@ pub struct Particles {
     pub cold: Vec<Cold>,
     /// Position at the end of the step being computed (scratch of the particle update).
     pub x_next: Vec<[f64; 2]>,
+    /// Displacement gradient (∂ux/∂x, ∂ux/∂y, ∂uy/∂x, ∂uy/∂y), accumulated as Σ L·Δt; only
+    /// the J-integral needs it, so it is empty (never computed) when the scene has no cracks.
+    pub grad_u: Vec<[f64; 4]>,
     /// Crack field of each particle–node pair: bit (3a + b) set means the pair (a, b) of the
     /// 3×3 stencil uses velocity field 1. Empty when the scene has no cracks.
     pub fmask: Vec<u16>,
@@ -84,6 +85,8 @@ pub struct PartsMut<'a> {
     pub x_next: &'a mut [[f64; 2]],
     /// Field masks (empty without cracks).
     pub fmask: &'a mut [u16],
+    /// Displacement gradients (empty without cracks).
+    pub grad_u: &'a mut [[f64; 4]],
 }
 
 impl<'a> PartsMut<'a> {
@@ -96,6 +99,7 @@ impl<'a> PartsMut<'a> {
             cold: &mut p.cold,
             x_next: &mut p.x_next,
             fmask: &mut p.fmask,
+            grad_u: &mut p.grad_u,
         }
     }
     /// Number of particles in the view.
@@ -118,6 +122,11 @@ impl<'a> PartsMut<'a> {
         } else {
             self.fmask.split_at_mut(i)
         };
+        let (g0, g1) = if self.grad_u.is_empty() {
+            (&mut [][..], &mut [][..])
+        } else {
+            self.grad_u.split_at_mut(i)
+        };
         (
             PartsMut {
                 kin: k0,
@@ -126,6 +135,7 @@ impl<'a> PartsMut<'a> {
                 cold: c0,
                 x_next: x0,
                 fmask: f0,
+                grad_u: g0,
             },
             PartsMut {
                 kin: k1,
@@ -134,6 +144,7 @@ impl<'a> PartsMut<'a> {
                 cold: c1,
                 x_next: x1,
                 fmask: f1,
+                grad_u: g1,
             },
         )
     }

@@ -18,7 +18,7 @@ use fracture_api::scene::{Analysis, Damping, FieldKind, ShapeFunction};
 use rayon::prelude::*;
 
 use crate::crack::Cracks;
-use crate::grid::{GridGeom, GridMut, Node, PAD, Reduce, STRIP, for_strips};
+use crate::grid::{GridGeom, GridMut, Node, PAD, Reduce, STRIP, for_strips, visit_stencil};
 use crate::material::Elastic;
 use crate::particles::{Cold, Kin, Mech, Particles, PartsMut};
 use crate::shape::Weights2;
@@ -45,9 +45,7 @@ pub enum BuildError {
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
 pub enum StepError {
     /// A particle quantity became NaN or infinite.
-    #[error(
-        "step {step}: {quantity} of particle {particle} at ({x:.6e}, {y:.6e}) m is not finite"
-    )]
+    #[error("step {step}: {quantity} of particle {particle} at ({x:.6e}, {y:.6e}) m is not finite")]
     NonFinite {
         /// Step number.
         step: u64,
@@ -242,6 +240,7 @@ pub struct Simulation {
     scratch_mech: Vec<Mech>,
     scratch_stress: Vec<[f64; 4]>,
     scratch_cold: Vec<Cold>,
+    scratch_grad: Vec<[f64; 4]>,
     col_sums: Vec<f64>,
     cracks: Option<Box<Cracks>>,
 }
@@ -279,10 +278,7 @@ impl Simulation {
         let mut id = 0u32;
         fracture_api::lattice::for_each_seed(scene, |s| {
             let body = &scene.bodies[s.body as usize];
-            let mat = names
-                .iter()
-                .position(|n| **n == body.material)
-                .unwrap_or(0);
+            let mat = names.iter().position(|n| **n == body.material).unwrap_or(0);
             let sub = h / s.ppc as f64;
             let vol = sub * sub * scene.thickness;
             let load = scene
@@ -305,7 +301,6 @@ impl Simulation {
             parts.stress.push([0.0; 4]);
             parts.cold.push(Cold {
                 x0: s.x,
-                grad_u: [0.0; 4],
                 id,
                 body: s.body,
             });
@@ -394,6 +389,11 @@ impl Simulation {
             scratch_mech: vec![Mech::default(); n],
             scratch_stress: vec![[0.0; 4]; n],
             scratch_cold: vec![Cold::default(); n],
+            scratch_grad: if scene.cracks.is_empty() {
+                Vec::new()
+            } else {
+                vec![[0.0; 4]; n]
+            },
             col_sums: vec![0.0; geom.cols],
             parts,
             cracks: None,
@@ -401,6 +401,7 @@ impl Simulation {
         if !scene.cracks.is_empty() {
             sim.slot_of = vec![u32::MAX; storage];
             sim.parts.fmask = vec![0; n];
+            sim.parts.grad_u = vec![[0.0; 4]; n];
             sim.cracks = Some(Box::new(Cracks::new(scene, &sim.geom, &sim.mats)));
         }
         sim.kinetic = sim.kinetic_energy();
@@ -475,6 +476,12 @@ impl Simulation {
         std::mem::swap(&mut p.mech, &mut self.scratch_mech);
         std::mem::swap(&mut p.stress, &mut self.scratch_stress);
         std::mem::swap(&mut p.cold, &mut self.scratch_cold);
+        if !p.grad_u.is_empty() {
+            for (i, &d) in self.sort_perm.iter().enumerate() {
+                self.scratch_grad[d as usize] = p.grad_u[i];
+            }
+            std::mem::swap(&mut p.grad_u, &mut self.scratch_grad);
+        }
         self.needs_sort = false;
         Ok(())
     }
@@ -509,12 +516,14 @@ impl Simulation {
         self.set_active_box(&acc);
         self.apply_bc_momentum(t0, false);
         self.contact(Stage::Extrapolated);
+        self.nodal(Stage::Extrapolated);
 
         // Pass 2: first stress half-update and forces; damping, BC force fix, contact.
         let acc = self.pass_forces();
         self.check(&acc)?;
         self.grid_forces(t1);
         self.contact(Stage::Forces);
+        self.nodal(Stage::Forces);
 
         // Pass 3: particle update and re-extrapolation; BCs and contact on the new momenta.
         let acc = self.pass_update();
@@ -525,10 +534,18 @@ impl Simulation {
         self.needs_sort |= acc.resort;
         self.apply_bc_momentum(t1, true);
         self.contact(Stage::Reextrapolated);
+        self.nodal(Stage::Reextrapolated);
 
         // Crack surfaces move with the grid velocities (§5).
         if let Some(cr) = self.cracks.as_mut() {
-            cr.move_surfaces(&self.geom, &self.nodes, &self.f1, &self.slot_of, self.m_tiny, dt);
+            cr.move_surfaces(
+                &self.geom,
+                &self.nodes,
+                &self.f1,
+                &self.slot_of,
+                self.m_tiny,
+                dt,
+            );
         }
 
         // Pass 4: second stress half-update; positions committed.
@@ -658,6 +675,33 @@ impl Simulation {
             + self.f1.len();
     }
 
+    /// Nodal velocity (p/m after extrapolation, q/m after re-extrapolation) or acceleration
+    /// (f/m after the force stage) on every active node and field.
+    fn nodal(&mut self, stage: Stage) {
+        let m_tiny = self.m_tiny;
+        let set = move |n: &mut Node| {
+            if n.m > m_tiny {
+                let inv = 1.0 / n.m;
+                match stage {
+                    Stage::Extrapolated => n.v = [n.p[0] * inv, n.p[1] * inv],
+                    Stage::Forces => n.a = [n.f[0] * inv, n.f[1] * inv],
+                    Stage::Reextrapolated => n.v = [n.q[0] * inv, n.q[1] * inv],
+                }
+            } else {
+                n.v = [0.0; 2];
+                n.a = [0.0; 2];
+            }
+        };
+        let [x0, x1, y0, y1] = self.active_box;
+        let ny = self.geom.ny;
+        if self.active_nodes > 0 {
+            self.nodes[(x0 + PAD) * ny..(x1 + 1 + PAD) * ny]
+                .par_chunks_mut(ny)
+                .for_each(|c| c[y0..=y1].iter_mut().for_each(set));
+        }
+        self.f1.iter_mut().for_each(set);
+    }
+
     /// Velocity boundary conditions on the extrapolated (`reextrapolated == false`: p) or
     /// re-extrapolated (q) momenta, on every field of each constrained node.
     fn apply_bc_momentum(&mut self, t: f64, reextrapolated: bool) {
@@ -770,7 +814,14 @@ impl Simulation {
 
     fn contact(&mut self, stage: Stage) {
         if let Some(cr) = self.cracks.as_mut() {
-            let d = cr.contact(stage, &mut self.nodes, &mut self.f1, &self.f1_index, self.m_tiny, self.dt);
+            let d = cr.contact(
+                stage,
+                &mut self.nodes,
+                &mut self.f1,
+                &self.f1_index,
+                self.m_tiny,
+                self.dt,
+            );
             self.dissipated += d;
         }
     }
@@ -879,29 +930,20 @@ impl Simulation {
                 if !(k.v[0].is_finite() && k.v[1].is_finite()) {
                     first_fail(&mut acc, first + i, FAIL_VELOCITY);
                 }
-                for a in 0..3 {
-                    let sx = w.x.s[a];
-                    if sx == 0.0 {
-                        continue;
+                let mv = [m * k.v[0], m * k.v[1]];
+                visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
+                    let s = w.s(a, b);
+                    if s == 0.0 {
+                        return;
                     }
-                    let col = geom.index((w.x.base + a as i32) as usize, w.y.base as usize);
-                    for b in 0..3 {
-                        let s = sx * w.y.s[b];
-                        if s == 0.0 {
-                            continue;
-                        }
-                        let field = ((mask >> (3 * a + b)) & 1) as u8;
-                        let n = g.node(col + b, field, &slot_of);
-                        let sm = s * m;
-                        n.m += sm;
-                        n.p[0] += sm * k.v[0];
-                        n.p[1] += sm * k.v[1];
-                        if cracks {
-                            n.u[0] += sm * disp[0];
-                            n.u[1] += sm * disp[1];
-                        }
+                    n.m += s * m;
+                    n.p[0] += s * mv[0];
+                    n.p[1] += s * mv[1];
+                    if cracks {
+                        n.u[0] += s * m * disp[0];
+                        n.u[1] += s * m * disp[1];
                     }
-                }
+                });
             }
             acc
         });
@@ -913,7 +955,7 @@ impl Simulation {
     fn pass_forces(&mut self) -> Acc {
         let geom = self.geom;
         let shape = self.shape;
-        let m_tiny = self.m_tiny;
+
         let half = 0.5 * self.dt;
         let inv_h = 1.0 / geom.h;
         let h = geom.h;
@@ -930,24 +972,13 @@ impl Simulation {
                 let mask = if has_mask { p.fmask[i] } else { 0 };
                 // L_ij = Σ_nodes v_i ∂S/∂x_j, each node giving its particle's field (pitfall 3).
                 let mut l = [[0.0; 2]; 2];
-                for a in 0..3 {
-                    let col = geom.index((w.x.base + a as i32) as usize, w.y.base as usize);
-                    for b in 0..3 {
-                        let gr = w.g(a, b);
-                        if gr[0] == 0.0 && gr[1] == 0.0 {
-                            continue;
-                        }
-                        let field = ((mask >> (3 * a + b)) & 1) as u8;
-                        let n = g.node(col + b, field, &slot_of);
-                        if n.m > m_tiny {
-                            let v = [n.p[0] / n.m, n.p[1] / n.m];
-                            l[0][0] += v[0] * gr[0];
-                            l[0][1] += v[0] * gr[1];
-                            l[1][0] += v[1] * gr[0];
-                            l[1][1] += v[1] * gr[1];
-                        }
-                    }
-                }
+                visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
+                    let gr = w.g(a, b);
+                    l[0][0] += n.v[0] * gr[0];
+                    l[0][1] += n.v[0] * gr[1];
+                    l[1][0] += n.v[1] * gr[0];
+                    l[1][1] += n.v[1] * gr[1];
+                });
                 for r in &mut l {
                     r[0] *= inv_h;
                     r[1] *= inv_h;
@@ -955,11 +986,13 @@ impl Simulation {
                 let mat = &mats[mech.mat as usize];
                 let dw = mat.update(&mut p.stress[i], l, half);
                 p.mech[i].w += dw;
-                let gu = &mut p.cold[i].grad_u;
-                gu[0] += l[0][0] * half;
-                gu[1] += l[0][1] * half;
-                gu[2] += l[1][0] * half;
-                gu[3] += l[1][1] * half;
+                if has_mask {
+                    let gu = &mut p.grad_u[i];
+                    gu[0] += l[0][0] * half;
+                    gu[1] += l[0][1] * half;
+                    gu[2] += l[1][0] * half;
+                    gu[3] += l[1][1] * half;
+                }
                 let s = p.stress[i];
                 if !(s[0].is_finite() && s[1].is_finite() && s[2].is_finite()) {
                     first_fail(&mut acc, first + i, FAIL_STRESS);
@@ -973,20 +1006,15 @@ impl Simulation {
                     [0.0; 2]
                 };
                 let vs = mech.vol * inv_h;
-                for a in 0..3 {
-                    let col = geom.index((w.x.base + a as i32) as usize, w.y.base as usize);
-                    for b in 0..3 {
-                        let sh = w.s(a, b);
-                        if sh == 0.0 {
-                            continue;
-                        }
-                        let gr = w.g(a, b);
-                        let field = ((mask >> (3 * a + b)) & 1) as u8;
-                        let n = g.node(col + b, field, &slot_of);
-                        n.f[0] += -vs * (s[0] * gr[0] + s[2] * gr[1]) + sh * fext[0];
-                        n.f[1] += -vs * (s[2] * gr[0] + s[1] * gr[1]) + sh * fext[1];
+                visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
+                    let sh = w.s(a, b);
+                    if sh == 0.0 {
+                        return;
                     }
-                }
+                    let gr = w.g(a, b);
+                    n.f[0] += -vs * (s[0] * gr[0] + s[2] * gr[1]) + sh * fext[0];
+                    n.f[1] += -vs * (s[2] * gr[0] + s[1] * gr[1]) + sh * fext[1];
+                });
             }
             acc
         });
@@ -1001,7 +1029,7 @@ impl Simulation {
     fn pass_update(&mut self) -> Acc {
         let geom = self.geom;
         let shape = self.shape;
-        let m_tiny = self.m_tiny;
+
         let dt = self.dt;
         let h = geom.h;
         let slot_of = std::mem::take(&mut self.slot_of);
@@ -1019,26 +1047,15 @@ impl Simulation {
                 let mask = if has_mask { p.fmask[i] } else { 0 };
                 let mut acc_p = [0.0; 2];
                 let mut vbar = [0.0; 2];
-                for a in 0..3 {
-                    let col = geom.index((w.x.base + a as i32) as usize, w.y.base as usize);
-                    for b in 0..3 {
-                        let sh = w.s(a, b);
-                        if sh == 0.0 {
-                            continue;
-                        }
-                        let field = ((mask >> (3 * a + b)) & 1) as u8;
-                        let n = g.node(col + b, field, &slot_of);
-                        if n.m > m_tiny {
-                            let inv = 1.0 / n.m;
-                            for c in 0..2 {
-                                let an = n.f[c] * inv;
-                                acc_p[c] += sh * an;
-                                // (v_old + v_new)/2 = p/m + Δt/2 · f/m
-                                vbar[c] += sh * (n.p[c] * inv + 0.5 * dt * an);
-                            }
-                        }
+                visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
+                    let sh = w.s(a, b);
+                    for c in 0..2 {
+                        let an = sh * n.a[c];
+                        acc_p[c] += an;
+                        // (v_old + v_new)/2 = p/m + Δt/2 · f/m
+                        vbar[c] += sh * n.v[c] + 0.5 * dt * an;
                     }
-                }
+                });
                 let v_old = k.v;
                 let v = [v_old[0] + dt * acc_p[0], v_old[1] + dt * acc_p[1]];
                 let xn = [k.x[0] + dt * vbar[0], k.x[1] + dt * vbar[1]];
@@ -1047,8 +1064,10 @@ impl Simulation {
                 } else if !(xn[0].is_finite() && xn[1].is_finite()) {
                     first_fail(&mut acc, first + i, FAIL_POSITION);
                 } else {
-                    let (cx, cy) = geom.cell(xn);
-                    if cx < 1 || cy < 1 || cx + 1 >= ncx || cy + 1 >= ncy {
+                    // Truncation (not floor): negative ξ gives 0 and is caught as < 1 too.
+                    let xi = geom.xi(xn);
+                    let (cx, cy) = (xi[0] as i64, xi[1] as i64);
+                    if xi[0] < 1.0 || xi[1] < 1.0 || cx + 1 >= ncx || cy + 1 >= ncy {
                         first_fail(&mut acc, first + i, FAIL_GRID);
                     }
                     if cx < lo || cx > hi {
@@ -1066,20 +1085,12 @@ impl Simulation {
                         * dt;
                 }
                 // Re-extrapolate momentum with the same weights and fields (pitfall 2).
-                for a in 0..3 {
-                    let col = geom.index((w.x.base + a as i32) as usize, w.y.base as usize);
-                    for b in 0..3 {
-                        let sh = w.s(a, b);
-                        if sh == 0.0 {
-                            continue;
-                        }
-                        let field = ((mask >> (3 * a + b)) & 1) as u8;
-                        let n = g.node(col + b, field, &slot_of);
-                        let sm = sh * mech.m;
-                        n.q[0] += sm * v[0];
-                        n.q[1] += sm * v[1];
-                    }
-                }
+                let mv = [mech.m * v[0], mech.m * v[1]];
+                visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
+                    let sh = w.s(a, b);
+                    n.q[0] += sh * mv[0];
+                    n.q[1] += sh * mv[1];
+                });
             }
             acc
         });
@@ -1093,7 +1104,7 @@ impl Simulation {
     fn pass_strain_last(&mut self) -> Acc {
         let geom = self.geom;
         let shape = self.shape;
-        let m_tiny = self.m_tiny;
+
         let half = 0.5 * self.dt;
         let inv_h = 1.0 / geom.h;
         let slot_of = std::mem::take(&mut self.slot_of);
@@ -1107,24 +1118,13 @@ impl Simulation {
                 let w = Weights2::new(shape, geom.xi(k.x), mech.lh);
                 let mask = if has_mask { p.fmask[i] } else { 0 };
                 let mut l = [[0.0; 2]; 2];
-                for a in 0..3 {
-                    let col = geom.index((w.x.base + a as i32) as usize, w.y.base as usize);
-                    for b in 0..3 {
-                        let gr = w.g(a, b);
-                        if gr[0] == 0.0 && gr[1] == 0.0 {
-                            continue;
-                        }
-                        let field = ((mask >> (3 * a + b)) & 1) as u8;
-                        let n = g.node(col + b, field, &slot_of);
-                        if n.m > m_tiny {
-                            let v = [n.q[0] / n.m, n.q[1] / n.m];
-                            l[0][0] += v[0] * gr[0];
-                            l[0][1] += v[0] * gr[1];
-                            l[1][0] += v[1] * gr[0];
-                            l[1][1] += v[1] * gr[1];
-                        }
-                    }
-                }
+                visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
+                    let gr = w.g(a, b);
+                    l[0][0] += n.v[0] * gr[0];
+                    l[0][1] += n.v[0] * gr[1];
+                    l[1][0] += n.v[1] * gr[0];
+                    l[1][1] += n.v[1] * gr[1];
+                });
                 for r in &mut l {
                     r[0] *= inv_h;
                     r[1] *= inv_h;
@@ -1132,11 +1132,13 @@ impl Simulation {
                 let dw = mats[mech.mat as usize].update(&mut p.stress[i], l, half);
                 let wnew = mech.w + dw;
                 p.mech[i].w = wnew;
-                let gu = &mut p.cold[i].grad_u;
-                gu[0] += l[0][0] * half;
-                gu[1] += l[0][1] * half;
-                gu[2] += l[1][0] * half;
-                gu[3] += l[1][1] * half;
+                if has_mask {
+                    let gu = &mut p.grad_u[i];
+                    gu[0] += l[0][0] * half;
+                    gu[1] += l[0][1] * half;
+                    gu[2] += l[1][0] * half;
+                    gu[3] += l[1][1] * half;
+                }
                 let s = p.stress[i];
                 if !(s[0].is_finite() && s[1].is_finite() && s[2].is_finite()) {
                     first_fail(&mut acc, first + i, FAIL_STRESS);
@@ -1259,24 +1261,29 @@ impl Simulation {
         for i in 0..p.len() {
             let k = p.kin[i];
             let s = p.stress[i];
-            let gu = p.cold[i].grad_u;
+            // Small strain from the stress through the compliance (exact for linear
+            // elasticity): ε = [σ − ν(tr σ − σ)]/E per axis, γ = σxy/μ.
+            let mt = &self.mats[p.mech[i].mat as usize];
+            let e = [
+                (s[0] - mt.nu * (s[1] + s[3])) / mt.e,
+                (s[1] - mt.nu * (s[0] + s[3])) / mt.e,
+                s[2] / mt.c66,
+            ];
             for (c, name) in names.iter().enumerate() {
                 vals[c] = match *name {
                     "sxx" => s[0],
                     "syy" => s[1],
                     "sxy" => s[2],
-                    "exx" => gu[0],
-                    "eyy" => gu[3],
-                    "exy" => 0.5 * (gu[1] + gu[2]),
+                    "exx" => e[0],
+                    "eyy" => e[1],
+                    "exy" => 0.5 * e[2],
                     "vx" => k.v[0],
                     "vy" => k.v[1],
                     "speed" => k.v[0].hypot(k.v[1]),
                     "ux" => k.x[0] - p.cold[i].x0[0],
                     "uy" => k.x[1] - p.cold[i].x0[1],
                     // N = h(σ1 − σ2)/f_σ, σ1 − σ2 = 2·sqrt(((σxx − σyy)/2)² + σxy²).
-                    "fringe" => {
-                        thickness * 2.0 * (0.5 * (s[0] - s[1])).hypot(s[2]) / fringe_c
-                    }
+                    "fringe" => thickness * 2.0 * (0.5 * (s[0] - s[1])).hypot(s[2]) / fringe_c,
                     "material" => p.mech[i].mat as f64,
                     _ => 0.0,
                 };
@@ -1327,11 +1334,7 @@ impl Simulation {
             cell_size: g.h,
             fields: fields.iter().map(|f| f.name().to_string()).collect(),
             components,
-            cracks: self
-                .cracks
-                .as_ref()
-                .map(|c| c.lines())
-                .unwrap_or_default(),
+            cracks: self.cracks.as_ref().map(|c| c.lines()).unwrap_or_default(),
         }
     }
 }

@@ -26,7 +26,10 @@ fn free_flight_keeps_momentum_and_no_stress() {
     }
     let p1 = momentum(&sim);
     for k in 0..2 {
-        assert!((p1[k] - p0[k]).abs() <= 1e-12 * p0[k].abs(), "momentum {p0:?} -> {p1:?}");
+        assert!(
+            (p1[k] - p0[k]).abs() <= 1e-12 * p0[k].abs(),
+            "momentum {p0:?} -> {p1:?}"
+        );
     }
     let smax = sim
         .particles()
@@ -36,8 +39,12 @@ fn free_flight_keeps_momentum_and_no_stress() {
         .fold(0.0f64, |a, b| a.max(b.abs()));
     assert!(smax < 1e-6, "free flight developed stress {smax} Pa");
     // It really flew: ~12 m/s × 0.4 ms = 4.8 mm.
-    let x: f64 = sim.particles().kin.iter().map(|k| k.x[0]).sum::<f64>() / sim.particle_count() as f64;
-    assert!((x - (0.02 + 12.0 * sim.time())).abs() < 1e-9, "centre x = {x}");
+    let x: f64 =
+        sim.particles().kin.iter().map(|k| k.x[0]).sum::<f64>() / sim.particle_count() as f64;
+    assert!(
+        (x - (0.02 + 12.0 * sim.time())).abs() < 1e-9,
+        "centre x = {x}"
+    );
 }
 
 /// Laterally constrained bar under a step traction at one end: the front moves at the
@@ -116,9 +123,16 @@ fn constrained_bar_wave_speed_and_particle_velocity() {
     }
     let c_err = (c - c_l).abs() / c_l;
     let v_err = (plateau - v_expected).abs() / v_expected;
-    eprintln!("front speed {c:.1} m/s vs c_L {c_l:.1} ({:.2} %), v {plateau:.5} vs {v_expected:.5} ({:.2} %)", 100.0 * c_err, 100.0 * v_err);
+    eprintln!(
+        "front speed {c:.1} m/s vs c_L {c_l:.1} ({:.2} %), v {plateau:.5} vs {v_expected:.5} ({:.2} %)",
+        100.0 * c_err,
+        100.0 * v_err
+    );
     assert!(c_err < 0.02, "front speed {c} vs c_L {c_l}");
-    assert!(v_err < 0.03, "particle velocity {plateau} vs σ/(ρc) {v_expected}");
+    assert!(
+        v_err < 0.03,
+        "particle velocity {plateau} vs σ/(ρc) {v_expected}"
+    );
 }
 
 /// Fixed–free vibrating bar (reference-solutions.md): L = 25, E = 100, ρ = 1, v₀ = 0.1,
@@ -144,7 +158,11 @@ fn vibrating_bar_period_and_energy() {
     let total0 = e0.kinetic + e0.strain;
     let mean_v = |sim: &fracture_solver::Simulation| {
         let p = sim.particles();
-        p.kin.iter().zip(&p.mech).map(|(k, m)| m.m * k.v[0]).sum::<f64>()
+        p.kin
+            .iter()
+            .zip(&p.mech)
+            .map(|(k, m)| m.m * k.v[0])
+            .sum::<f64>()
     };
     let mut prev = (sim.time(), mean_v(&sim));
     let mut crossings = Vec::new();
@@ -163,7 +181,11 @@ fn vibrating_bar_period_and_energy() {
     let e1 = sim.energy();
     let total1 = e1.kinetic + e1.strain;
     let loss = (total0 - total1) / total0;
-    eprintln!("period {period:.5} (10.000), energy change {:.3} % over {:.1} periods", 100.0 * loss, sim.time() / 10.0);
+    eprintln!(
+        "period {period:.5} (10.000), energy change {:.3} % over {:.1} periods",
+        100.0 * loss,
+        sim.time() / 10.0
+    );
     assert!((period - 10.0).abs() / 10.0 < 0.005, "period {period}");
     assert!(loss.abs() < 0.01, "energy changed by {:.3} %", 100.0 * loss);
 }
@@ -192,7 +214,11 @@ fn impact_energy_balance() {
     let e = sim.energy();
     eprintln!("{e:?}; worst |error| {worst:e}");
     assert!(e.external_work > 0.0);
-    assert!(worst < 0.01 * e.external_work, "energy error {worst:e} vs input {:e}", e.external_work);
+    assert!(
+        worst < 0.01 * e.external_work,
+        "energy error {worst:e} vs input {:e}",
+        e.external_work
+    );
 }
 
 /// 1 thread and 2 threads give bitwise-identical energies and particle states.
@@ -215,7 +241,12 @@ fn threads_give_identical_results() {
             sim.step().unwrap();
             rows.push(sim.energy().to_csv());
         }
-        let state: Vec<u64> = sim.particles().kin.iter().flat_map(|k| [k.x[0].to_bits(), k.v[1].to_bits()]).collect();
+        let state: Vec<u64> = sim
+            .particles()
+            .kin
+            .iter()
+            .flat_map(|k| [k.x[0].to_bits(), k.v[1].to_bits()])
+            .collect();
         (rows, state)
     };
     let (a, sa) = run(1);

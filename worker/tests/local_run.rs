@@ -333,3 +333,52 @@ fn free_flight_keeps_its_momentum() {
     assert!(snap.component("ux").is_some());
     assert!(snap.component("material").is_some());
 }
+
+#[test]
+fn crack_tips_get_one_row_per_tip_per_sample() {
+    // A centre crack in a small plate pulled on two edges; history every 1 µs.
+    let scene = fracture_api::validate::parse_scene(
+        r#"{"name": "center-crack",
+            "grid": {"cell_size": 0.001, "min": [0, 0], "max": [0.04, 0.04]},
+            "materials": {"plate": {"model": "linear_elastic", "density": 1230.0,
+                                     "youngs_modulus": 5.2e9, "poissons_ratio": 0.34}},
+            "bodies": [{"material": "plate",
+                        "region": {"rectangle": {"min": [0.004, 0.004], "max": [0.036, 0.036]}}}],
+            "cracks": [{"points": [[0.016, 0.0205], [0.024, 0.0205]]}],
+            "loads": [
+              {"region": {"rectangle": {"min": [0.004, 0.035], "max": [0.036, 0.036]}},
+               "traction": [0, 1e6]},
+              {"region": {"rectangle": {"min": [0.004, 0.004], "max": [0.036, 0.005]}},
+               "traction": [0, -1e6]}],
+            "time": {"end": 5e-6},
+            "output": {"history_interval": 1e-6}}"#,
+    )
+    .unwrap();
+    let dir = tempfile::tempdir().unwrap();
+    let mut sink = LocalOutput::create(dir.path()).unwrap();
+    let s = run_scene(&scene, &opts(), &mut sink);
+    assert_eq!(s.status, RunStatus::Completed, "{s:?}");
+    let energy = lines(&dir.path().join("energy.csv"));
+    let tips = lines(&dir.path().join("crack_tips.csv"));
+    assert_eq!(tips[0], CRACK_TIPS_CSV_HEADER);
+    // Two tips (both ends lie inside the plate) per history sample.
+    assert_eq!(tips.len() - 1, 2 * (energy.len() - 1));
+    for (i, l) in tips[1..].iter().enumerate() {
+        let cols: Vec<&str> = l.split(',').collect();
+        assert_eq!(cols.len(), 12, "{l}");
+        assert_eq!(cols[1], "0", "{l}");
+        assert_eq!(cols[2], (i % 2).to_string(), "{l}");
+        assert!(cols[11] == "0" || cols[11] == "1", "{l}");
+        // Same time as the energy sample it belongs to.
+        let t: f64 = cols[0].parse().unwrap();
+        let te: f64 = energy[1 + i / 2]
+            .split(',')
+            .next()
+            .unwrap()
+            .parse()
+            .unwrap();
+        assert_eq!(t, te);
+    }
+    let m = McapContents::read(dir.path().join("fields.mcap")).unwrap();
+    assert_eq!(m.crack_tips.len(), tips.len() - 1);
+}

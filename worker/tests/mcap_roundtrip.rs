@@ -287,3 +287,12 @@ fn scene_metadata_is_recorded() {
     assert_eq!(meta["hash"], scene.hash());
     assert_eq!(meta["json"], scene.canonical_json());
 }
+
+#[test]
+fn writers_can_move_to_another_thread() {
+    // The server writes each job's file from its own task.
+    fn assert_send<T: Send>() {}
+    assert_send::<McapWriter>();
+    assert_send::<fracture_worker::LocalOutput>();
+    assert_send::<McapContents>();
+}

@@ -1,0 +1,36 @@
+//! Steps the seed block at a chosen cell size, for profilers (callgrind, perf):
+//! `cargo run --release -p fracture-solver --example profile_step -- 0.002 20 [crack]`.
+#![allow(clippy::unwrap_used, clippy::print_stdout, missing_docs)]
+
+use fracture_solver::{Simulation, SolverConfig};
+
+fn main() {
+    let args: Vec<String> = std::env::args().collect();
+    let cell: f64 = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(0.002);
+    let steps: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(20);
+    let crack = args.get(3).is_some_and(|a| a == "crack");
+    let m = 4.0 * cell;
+    let mut v = serde_json::json!({
+        "grid": {"cell_size": cell, "min": [0.0, 0.0], "max": [0.125 + 2.0 * m, 0.25 + 2.0 * m]},
+        "materials": {"h": {"model": "linear_elastic", "density": 1230.0, "youngs_modulus": 5.2e9, "poissons_ratio": 0.34}},
+        "bodies": [{"material": "h", "region": {"rectangle": {"min": [m, m], "max": [m + 0.125, m + 0.25]}}}],
+        "boundary_conditions": [{"region": {"rectangle": {"min": [0.0, m], "max": [m + 0.01 * cell, m + 0.125]}}, "velocity": {"x": 25.0}}],
+        "time": {"end": 1.0}
+    });
+    if crack {
+        v["cracks"] = serde_json::json!([{"points": [[0.0, m + 0.125 + 0.25 * cell], [m + 0.05, m + 0.125 + 0.25 * cell]]}]);
+    }
+    let scene = serde_json::from_value(v).unwrap();
+    let mut sim = Simulation::new(&scene, SolverConfig { threads: 1 }).unwrap();
+    sim.step().unwrap();
+    let t = std::time::Instant::now();
+    for _ in 0..steps {
+        sim.step().unwrap();
+    }
+    let dt = t.elapsed().as_secs_f64();
+    println!(
+        "{} particles, {steps} steps: {:.3e} particle-steps/s (1 thread)",
+        sim.particle_count(),
+        (sim.particle_count() * steps) as f64 / dt
+    );
+}
