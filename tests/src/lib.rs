@@ -9,9 +9,10 @@ use serde_json::Value;
 
 /// The `fracture` binary next to the test executable (`target/<profile>/fracture`).
 ///
-/// Cargo does not build the binaries of dependencies, so the first call runs
-/// `cargo build -p fracture-server --bin fracture` for the test's profile (quick when it is
-/// up to date; `cargo test --workspace` has built it already).
+/// `cargo test --workspace` (or `-p fracture-server -p fracture-e2e`) builds it, because
+/// `fracture-server`'s own integration tests need it; Cargo does not build the binaries of
+/// dependencies, so when it is missing this runs `cargo build -p fracture-server --bin
+/// fracture` once (bounded to 10 minutes).
 pub fn fracture_bin() -> PathBuf {
     static BUILT: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
     BUILT
@@ -23,18 +24,28 @@ pub fn fracture_bin() -> PathBuf {
                 dir.pop();
             }
             let bin = dir.join(format!("fracture{}", std::env::consts::EXE_SUFFIX));
-            if std::env::var_os("FRACTURE_E2E_NO_BUILD").is_none() {
+            if !bin.exists() {
                 let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
                 let mut cmd = Command::new(cargo);
                 cmd.args(["build", "-q", "-p", "fracture-server", "--bin", "fracture"]);
                 if dir.file_name().is_some_and(|n| n == "release") {
                     cmd.arg("--release");
                 }
-                let _ = cmd.status();
+                if let Ok(mut child) = cmd.spawn() {
+                    let t0 = Instant::now();
+                    while t0.elapsed() < Duration::from_secs(600) {
+                        if let Ok(Some(_)) = child.try_wait() {
+                            break;
+                        }
+                        std::thread::sleep(Duration::from_millis(200));
+                    }
+                    let _ = child.kill();
+                    let _ = child.wait();
+                }
             }
             assert!(
                 bin.exists(),
-                "{} is not built: cargo build -p fracture-server",
+                "{} is not built: run `cargo test -p fracture-server -p fracture-e2e`",
                 bin.display()
             );
             bin
