@@ -123,3 +123,70 @@ pub struct ErrorBody {
     #[serde(default)]
     pub details: Vec<ErrorDetail>,
 }
+
+/// `GET /api/v1/health`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct HealthInfo {
+    /// `"ok"`.
+    pub status: String,
+    /// Local worker processes the server supervises.
+    pub workers: u64,
+    /// Jobs waiting for a worker.
+    pub queued: u64,
+    /// Jobs being run.
+    pub running: u64,
+}
+
+/// `POST /api/v1/scenes/validate` for a valid scene.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct ValidateResponse {
+    /// Always `true` (an invalid scene gets 422).
+    pub valid: bool,
+    /// Number of particles.
+    pub particles: u64,
+    /// Grid nodes of the box.
+    pub grid_nodes: u64,
+    /// Δt (s).
+    pub time_step: f64,
+    /// Time steps to reach the end time.
+    pub steps: u64,
+}
+
+/// One entry of `GET /api/v1/jobs/{id}/snapshots`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct SnapshotInfo {
+    /// Index of the snapshot in its run.
+    pub index: u32,
+    /// Simulated time (s).
+    pub time: f64,
+    /// Field kinds recorded (each renders as `{kind}.png` with its default component).
+    pub fields: Vec<String>,
+    /// Component names (each renders as `{component}.png`).
+    pub components: Vec<String>,
+}
+
+/// One built-in example scene (`GET /api/v1/scenes`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct SceneEntry {
+    /// File name without `.json`.
+    pub name: String,
+    /// The scene's description.
+    pub description: String,
+    /// The scene document.
+    pub scene: serde_json::Value,
+}
+
+/// The `status` event of a job's event stream (also sent first to a late subscriber).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct StatusEvent {
+    /// Job id.
+    pub id: String,
+    /// Current state.
+    pub status: JobStatus,
+    /// Claims so far.
+    pub attempts: u32,
+    /// Why the job failed or was cancelled.
+    pub message: Option<String>,
+    /// The run summary once finished.
+    pub summary: Option<Summary>,
+}

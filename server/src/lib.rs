@@ -1,4 +1,28 @@
 //! The mpm-fracture service: HTTP API, SQLite store, durable job queue, SSE streams,
 //! results files and the dashboard.
+//!
+//! * [`app`] builds the axum [`Router`](axum::Router) from an [`AppState`]; it is what the
+//!   binary serves and what the unit tests drive with `tower::ServiceExt::oneshot`.
+//! * [`store`] owns the SQLite database (jobs, the queue with leases and fencing tokens,
+//!   history rows and snapshots); [`files`] owns each job's MCAP file. The server is the
+//!   one writer of both; workers talk HTTP only ([`protocol`], [`client`]).
+//! * [`cli`] has the `serve`, `worker` and `submit` commands.
 
+pub mod assets;
 pub mod cli;
+pub mod client;
+pub mod codec;
+pub mod config;
+pub mod error;
+pub mod events;
+pub mod files;
+pub mod protocol;
+pub mod render;
+pub mod routes;
+pub mod server;
+pub mod store;
+
+pub use config::Config;
+pub use error::ApiError;
+pub use routes::app;
+pub use server::AppState;

@@ -1,0 +1,281 @@
+//! `app(state)` driven with `tower::ServiceExt::oneshot`, no socket: error formats, status
+//! codes, auth, limits, and the worker protocol's fencing.
+
+#![allow(clippy::unwrap_used)]
+
+use axum::body::Body;
+use axum::http::{Request, StatusCode};
+use fracture_server::config::{Config, Limits};
+use fracture_server::files::JobFiles;
+use fracture_server::store::Store;
+use fracture_server::{AppState, app};
+use http_body_util::BodyExt;
+use serde_json::{Value, json};
+use tower::ServiceExt;
+
+async fn state(dir: &std::path::Path, token: Option<&str>) -> AppState {
+    let store = Store::open(&dir.join("t.db")).await.unwrap();
+    let cfg = Config {
+        api_token: token.map(String::from),
+        worker_token: "wt".into(),
+        limits: Limits {
+            max_particles: 1000,
+            max_body_bytes: 32 * 1024,
+            ..Limits::default()
+        },
+        ..Config::default()
+    };
+    AppState::new(store, cfg, JobFiles::new(dir)).0
+}
+
+fn scene() -> Value {
+    json!({
+        "name": "unit",
+        "grid": { "cell_size": 0.001, "min": [0.0, 0.0], "max": [0.022, 0.012] },
+        "materials": { "m": { "model": "linear_elastic", "density": 1230.0,
+                              "youngs_modulus": 3.96e9, "poissons_ratio": 0.35 } },
+        "bodies": [ { "material": "m",
+                      "region": { "rectangle": { "min": [0.001, 0.001], "max": [0.021, 0.011] } },
+                      "particles_per_cell": 2 } ],
+        "time": { "end": 1.0e-5 }
+    })
+}
+
+async fn call(st: &AppState, req: Request<Body>) -> (StatusCode, Value) {
+    let resp = app(st.clone()).oneshot(req).await.unwrap();
+    let status = resp.status();
+    let bytes = resp.into_body().collect().await.unwrap().to_bytes();
+    (
+        status,
+        serde_json::from_slice(&bytes).unwrap_or(Value::Null),
+    )
+}
+
+fn post(uri: &str, body: impl Into<Body>, token: Option<&str>) -> Request<Body> {
+    let mut b = Request::post(uri).header("content-type", "application/json");
+    if let Some(t) = token {
+        b = b.header("authorization", format!("Bearer {t}"));
+    }
+    b.body(body.into()).unwrap()
+}
+
+fn get(uri: &str) -> Request<Body> {
+    Request::get(uri).body(Body::empty()).unwrap()
+}
+
+fn assert_error_body(v: &Value, kind: &str) {
+    assert_eq!(v["error"], kind, "{v}");
+    assert!(v["message"].as_str().is_some_and(|m| !m.is_empty()), "{v}");
+    assert!(v["details"].is_array(), "{v}");
+}
+
+#[tokio::test]
+async fn malformed_json_is_400_in_the_error_format() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let (s, v) = call(&st, post("/api/v1/jobs", "{not json", None)).await;
+    assert_eq!(s, StatusCode::BAD_REQUEST);
+    assert_error_body(&v, "bad_request");
+}
+
+#[tokio::test]
+async fn invalid_scene_is_422_with_paths() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let mut sc = scene();
+    sc["materials"]["m"]["poissons_ratio"] = json!(0.7);
+    let (s, v) = call(&st, post("/api/v1/jobs", sc.to_string(), None)).await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY);
+    assert_error_body(&v, "invalid_scene");
+    assert_eq!(v["details"][0]["path"], "materials.m.poissons_ratio");
+
+    let mut sc = scene();
+    sc["grid"]["typo"] = json!(1);
+    let (s, v) = call(
+        &st,
+        post("/api/v1/jobs", json!({"scene": sc}).to_string(), None),
+    )
+    .await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY);
+    assert!(
+        v["details"][0]["path"]
+            .as_str()
+            .unwrap()
+            .starts_with("grid"),
+        "{v}"
+    );
+    assert!(
+        v["details"][0]["message"]
+            .as_str()
+            .unwrap()
+            .contains("typo"),
+        "{v}"
+    );
+    assert_eq!(st.store.count_all().await.unwrap(), 0);
+}
+
+#[tokio::test]
+async fn oversized_body_is_413_and_limits_are_422() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let big = format!("{{\"description\": \"{}\"}}", "x".repeat(64 * 1024));
+    let (s, v) = call(&st, post("/api/v1/jobs", big, None)).await;
+    assert_eq!(s, StatusCode::PAYLOAD_TOO_LARGE);
+    assert_error_body(&v, "payload_too_large");
+
+    let mut sc = scene();
+    sc["bodies"][0]["particles_per_cell"] = json!(4); // 3200 particles > 1000
+    let (s, v) = call(&st, post("/api/v1/scenes/validate", sc.to_string(), None)).await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY);
+    assert_error_body(&v, "limit_exceeded");
+    assert!(v["message"].as_str().unwrap().contains("max_particles"));
+    assert_eq!(st.store.count_all().await.unwrap(), 0);
+}
+
+#[tokio::test]
+async fn tokens_are_required_where_configured() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), Some("tok")).await;
+    let (s, v) = call(&st, post("/api/v1/jobs", scene().to_string(), None)).await;
+    assert_eq!(s, StatusCode::UNAUTHORIZED);
+    assert_error_body(&v, "unauthorized");
+    let (s, _) = call(&st, post("/api/v1/jobs", scene().to_string(), Some("bad"))).await;
+    assert_eq!(s, StatusCode::UNAUTHORIZED);
+    let (s, v) = call(&st, post("/api/v1/jobs", scene().to_string(), Some("tok"))).await;
+    assert_eq!(s, StatusCode::CREATED, "{v}");
+    assert_eq!(v["status"], "queued");
+    // Reading needs no token.
+    let (s, v) = call(&st, get("/api/v1/jobs")).await;
+    assert_eq!(s, StatusCode::OK);
+    assert_eq!(v.as_array().unwrap().len(), 1);
+    // Worker routes need the worker token.
+    let (s, _) = call(
+        &st,
+        post("/api/v1/worker/claim", "{\"worker_id\":\"w\"}", Some("tok")),
+    )
+    .await;
+    assert_eq!(s, StatusCode::UNAUTHORIZED);
+}
+
+#[tokio::test]
+async fn unknown_ids_are_404() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    for uri in [
+        "/api/v1/jobs/nope",
+        "/api/v1/jobs/nope/energy",
+        "/api/v1/jobs/nope/crack-tips",
+        "/api/v1/jobs/nope/snapshots",
+        "/api/v1/jobs/nope/snapshots/0/sxx.png",
+        "/api/v1/jobs/nope/fields.mcap",
+        "/api/v1/jobs/nope/events",
+        "/api/v1/nothing-here",
+    ] {
+        let (s, v) = call(&st, get(uri)).await;
+        assert_eq!(s, StatusCode::NOT_FOUND, "{uri}");
+        assert_error_body(&v, "not_found");
+    }
+    let (s, _) = call(&st, get("/api/v1/jobs?status=sleeping")).await;
+    assert_eq!(s, StatusCode::BAD_REQUEST);
+}
+
+#[tokio::test]
+async fn claim_fence_and_finish() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let (_, job) = call(&st, post("/api/v1/jobs", scene().to_string(), None)).await;
+    let id = job["id"].as_str().unwrap().to_string();
+    let (s, c) = call(
+        &st,
+        post(
+            "/api/v1/worker/claim",
+            "{\"worker_id\":\"w1\",\"wait_seconds\":0}",
+            Some("wt"),
+        ),
+    )
+    .await;
+    assert_eq!(s, StatusCode::OK);
+    assert_eq!(c["job_id"], id.as_str());
+    let fence = c["fence"].as_i64().unwrap();
+    // Nothing else to claim.
+    let resp = app(st.clone())
+        .oneshot(post(
+            "/api/v1/worker/claim",
+            "{\"worker_id\":\"w2\",\"wait_seconds\":0}",
+            Some("wt"),
+        ))
+        .await
+        .unwrap();
+    assert_eq!(resp.status(), StatusCode::NO_CONTENT);
+    // A stale fence is refused.
+    let rows = json!({"fence": fence + 7, "rows": [{"time": 0.0, "kinetic": 1.0, "strain": null,
+        "external_work": 0.0, "dissipated": 0.0, "total_error": 0.0}]});
+    let (s, v) = call(
+        &st,
+        post(
+            &format!("/api/v1/worker/jobs/{id}/energy"),
+            rows.to_string(),
+            Some("wt"),
+        ),
+    )
+    .await;
+    assert_eq!(s, StatusCode::CONFLICT);
+    assert_error_body(&v, "conflict");
+    let mut rows = rows;
+    rows["fence"] = json!(fence);
+    let (s, _) = call(
+        &st,
+        post(
+            &format!("/api/v1/worker/jobs/{id}/energy"),
+            rows.to_string(),
+            Some("wt"),
+        ),
+    )
+    .await;
+    assert_eq!(s, StatusCode::NO_CONTENT);
+    // Cancel reaches the heartbeat.
+    let (s, _) = call(&st, post(&format!("/api/v1/jobs/{id}/cancel"), "", None)).await;
+    assert_eq!(s, StatusCode::OK);
+    let (s, hb) = call(
+        &st,
+        post(
+            &format!("/api/v1/worker/jobs/{id}/heartbeat"),
+            json!({"fence": fence}).to_string(),
+            Some("wt"),
+        ),
+    )
+    .await;
+    assert_eq!(s, StatusCode::OK);
+    assert_eq!(hb["cancel"], true);
+    let (_, e) = call(&st, get(&format!("/api/v1/jobs/{id}/energy"))).await;
+    assert_eq!(e.as_array().unwrap().len(), 1);
+    assert!(e[0]["strain"].is_null(), "NaN travels as null: {e}");
+    // Running jobs cannot be deleted.
+    let (s, v) = call(
+        &st,
+        Request::delete(format!("/api/v1/jobs/{id}"))
+            .body(Body::empty())
+            .unwrap(),
+    )
+    .await;
+    assert_eq!(s, StatusCode::CONFLICT, "{v}");
+}
+
+#[tokio::test]
+async fn service_pages_are_served() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let (s, api) = call(&st, get("/api/v1/openapi.json")).await;
+    assert_eq!(s, StatusCode::OK);
+    assert!(api["paths"]["/api/v1/jobs/{id}/snapshots/{index}/{file}"].is_object());
+    let resp = app(st.clone()).oneshot(get("/")).await.unwrap();
+    assert_eq!(resp.status(), StatusCode::OK);
+    let resp = app(st.clone()).oneshot(get("/api/v1/docs/")).await.unwrap();
+    assert_eq!(resp.status(), StatusCode::OK);
+    let (s, h) = call(&st, get("/api/v1/health")).await;
+    assert_eq!(s, StatusCode::OK);
+    assert_eq!(h["status"], "ok");
+    let (s, v) = call(&st, get("/api/v1/scenes")).await;
+    assert_eq!(s, StatusCode::OK);
+    assert!(v.is_array());
+}
