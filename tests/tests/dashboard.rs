@@ -61,17 +61,16 @@ fn free_port() -> u16 {
     l.local_addr().expect("local addr").port()
 }
 
-/// Minimal blocking HTTP GET on loopback: (status, body).
-fn http_get(base: &str, path: &str) -> Option<(u16, String)> {
+/// Status code of a minimal blocking HTTP GET on loopback (reads only the status line, as
+/// some servers keep the connection open despite `Connection: close`).
+fn http_status(base: &str, path: &str) -> Option<u16> {
     let hostport = base.trim_start_matches("http://").trim_end_matches('/');
     let mut s = TcpStream::connect(hostport).ok()?;
     s.set_read_timeout(Some(Duration::from_secs(5))).ok()?;
     write!(s, "GET {path} HTTP/1.1\r\nHost: {hostport}\r\nConnection: close\r\n\r\n").ok()?;
-    let mut buf = String::new();
-    s.read_to_string(&mut buf).ok()?;
-    let status = buf.split_whitespace().nth(1)?.parse().ok()?;
-    let body = buf.split_once("\r\n\r\n").map(|x| x.1.to_string()).unwrap_or_default();
-    Some((status, body))
+    let mut line = String::new();
+    BufReader::new(s).read_line(&mut line).ok()?;
+    line.split_whitespace().nth(1)?.parse().ok()
 }
 
 /// The first `127.0.0.1:<port>` with a non-zero port in a log line.
@@ -139,7 +138,7 @@ fn start_server(bin: &Path, data: &Path) -> (Proc, String, Arc<Mutex<Vec<String>
         }
     };
     let deadline = Instant::now() + Duration::from_secs(30);
-    while http_get(&url, "/api/v1/health").map(|r| r.0) != Some(200) {
+    while http_status(&url, "/api/v1/health") != Some(200) {
         assert!(Instant::now() < deadline, "{url}/api/v1/health never answered 200");
         std::thread::sleep(Duration::from_millis(200));
     }
@@ -158,7 +157,7 @@ fn start_chromedriver(driver: &Path) -> (Proc, String) {
     let proc = Proc(child);
     let url = format!("http://127.0.0.1:{port}");
     let deadline = Instant::now() + Duration::from_secs(30);
-    while http_get(&url, "/status").map(|r| r.0) != Some(200) {
+    while http_status(&url, "/status") != Some(200) {
         assert!(Instant::now() < deadline, "chromedriver did not start");
         std::thread::sleep(Duration::from_millis(100));
     }
@@ -245,6 +244,9 @@ async fn browser_log_errors(c: &Client) -> Vec<String> {
             .iter()
             .filter(|e| e["level"].as_str() == Some("SEVERE"))
             .map(|e| e["message"].as_str().unwrap_or_default().to_string())
+            // the 422 answer to the scene this test gets wrong on purpose is logged by the
+            // browser as a failed load; it is the API working as specified
+            .filter(|m| !(m.contains("/api/v1/scenes/validate") && m.contains("status of 422")))
             .collect(),
         _ => Vec::new(),
     }

@@ -32,7 +32,8 @@ export function rowsOf(d) {
 /** Components a snapshot offers (its `fields` may list kinds or components). */
 export function snapshotComponents(snap) {
   const out = new Set();
-  for (const f of (snap && snap.fields) || []) for (const c of KIND_COMPONENTS[f] || [f]) out.add(c);
+  if (snap && Array.isArray(snap.components) && snap.components.length) for (const c of snap.components) out.add(c);
+  else for (const f of (snap && snap.fields) || []) for (const c of KIND_COMPONENTS[f] || [f]) out.add(c);
   return [...out].sort((a, b) => (COMPONENT_ORDER.indexOf(a) + 99) % 99 - (COMPONENT_ORDER.indexOf(b) + 99) % 99 || a.localeCompare(b));
 }
 
@@ -381,6 +382,12 @@ export function runView(main, { id }) {
     if (TERMINAL.has(job.status) && !finishing) finish();
   }
 
+  // Events that arrive before the first history load has answered wait here, so that the
+  // loaded rows and the streamed ones join without a gap or a skipped row.
+  let ready = false;
+  const pending = [];
+  const whenReady = (fn) => (d) => { if (ready) fn(d); else pending.push(() => fn(d)); };
+
   function connect() {
     let hadError = false;
     closeEvents = api.subscribe(id, {
@@ -391,9 +398,9 @@ export function runView(main, { id }) {
         if (job.status === 'queued') setStatus('running');
         renderProgress();
       },
-      crack_tip: (d) => { if (addTipRows(rowsOf(d))) renderSummary(); },
-      energy: (d) => addEnergyRows(rowsOf(d)),
-      snapshot: (d) => addSnapshots(rowsOfSnapshots(d)),
+      crack_tip: whenReady((d) => { if (addTipRows(rowsOf(d))) renderSummary(); }),
+      energy: whenReady((d) => addEnergyRows(rowsOf(d))),
+      snapshot: whenReady((d) => addSnapshots(rowsOfSnapshots(d))),
       status: (d) => {
         const st = typeof d === 'string' ? d : d && (d.status || (d.job && d.job.status));
         setStatus(st, d && typeof d === 'object' && d.message ? { message: d.message } : {});
@@ -434,6 +441,8 @@ export function runView(main, { id }) {
     } catch (e) {
       if (alive) notify(`Could not load the results: ${e.message}`, 'error');
     }
+    ready = true;
+    for (const f of pending.splice(0)) f();
     if (TERMINAL.has(job.status)) finishing = true;
   })();
 
