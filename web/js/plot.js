@@ -74,10 +74,11 @@ export class Plot {
     this.id = `plot${++plotCounter}`;
     this.reset = h('button', { type: 'button', class: 'small', hidden: true, onclick: () => this.resetZoom() }, 'Reset zoom');
     this.svgHost = h('div', {
-      class: 'plot-area', tabindex: 0, role: 'img',
+      class: 'plot-area', tabindex: 0, role: 'group', 'aria-roledescription': 'interactive plot',
       'aria-label': `${o.title || 'plot'}: drag or use + and − to zoom on time, double-click or Escape to reset, arrow keys to read values`,
     });
-    this.tip = h('div', { class: 'plot-tip', hidden: true, 'aria-live': 'polite' });
+    this.tip = h('div', { class: 'plot-tip', hidden: true, 'aria-live': 'polite', id: `${this.id}-tip` });
+    this.svgHost.setAttribute('aria-describedby', this.tip.id);
     this.legend = h('div', { class: 'legend', role: 'group', 'aria-label': `${o.title || 'plot'} series` });
     this.root = h('figure', { class: 'plot', id: o.id || this.id },
       h('figcaption', { class: 'plot-head' }, h('span', { class: 'plot-title' }, o.title || ''), this.reset),
@@ -131,6 +132,8 @@ export class Plot {
 
   setRefLines(lines) { this.refLines = lines || []; this.update(); }
   setXUnit(u) { this.o.xUnit = u; this.update(); }
+  /** Fix the unzoomed time axis to [t0, t1] (widened if data fall outside). */
+  setXDomain(t0, t1) { this.o.xDomain = Number.isFinite(t0) && Number.isFinite(t1) && t1 > t0 ? [t0, t1] : null; this.update(); }
   clear() { this.series = []; this.legendDirty = true; this.update(); }
 
   resetZoom() {
@@ -162,7 +165,10 @@ export class Plot {
     this.M.right = longest ? Math.min(160, 10 + longest * 6.3) : 16;
     const width = Math.max(240, this.svgHost.clientWidth || 600);
     const height = this.o.height;
-    const full = this.dataXRange();
+    let full = this.dataXRange();
+    // a known time span (0 … end time) keeps the axis still while a live run fills it
+    const d = this.o.xDomain;
+    if (d) full = full ? [Math.min(d[0], full[0]), Math.max(d[1], full[1])] : [d[0], d[1]];
     let [x0, x1] = this.zoom || full || [0, 1];
     if (x1 <= x0) { const d = Math.abs(x0) * 0.05 || 1e-9; x0 -= d; x1 += d; }
     let y0 = Infinity, y1 = -Infinity;

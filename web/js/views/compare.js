@@ -54,18 +54,23 @@ export function compareView(main) {
     }
   }
 
-  async function loadPlots() {
+  let shownKey = '';
+  async function loadPlots(refresh = false) {
     clearTimeout(timer);
-    for (const p of plots) p.destroy();
-    plots = [];
-    plotGrid.replaceChildren();
     const list = ids();
+    // a live refresh of the same selection keeps the plots (zoom, hidden series)
+    refresh = refresh && shownKey === list.join(',') && plots.length > 0;
+    if (!refresh) {
+      for (const p of plots) p.destroy();
+      plots = [];
+      plotGrid.replaceChildren();
+    }
     for (const box of picker.querySelectorAll('input[type=checkbox]')) box.checked = list.includes(box.value);
     if (!list.length) {
       replace(chosenHost, h('p', { class: 'empty-state' }, 'Pick two or more runs above (or tick them in the runs list) to overlay their crack-tip speed and J curves.'));
       return;
     }
-    replace(chosenHost, h('p', { class: 'muted' }, 'Loading…'));
+    if (!refresh) replace(chosenHost, h('p', { class: 'muted' }, 'Loading…'));
     const results = await Promise.all(list.map(async (id) => {
       try {
         const [job, tips] = await Promise.all([api.getJob(id), api.history(id, 'crack-tips').catch(() => [])]);
@@ -82,9 +87,15 @@ export function compareView(main) {
       ' ', h('button', { type: 'button', class: 'small secondary', 'aria-label': `Remove ${r.job ? r.job.name : r.id} from the comparison`, onclick: () => setIds(ids().filter((x) => x !== r.id)) }, 'Remove')))));
     const end = Math.max(...ok.map((r) => (r.job.scene && r.job.scene.time && r.job.scene.time.end) || 0), 1e-9);
     const xUnit = timeUnit(end);
-    const speedPlot = new Plot(plotGrid, { id: 'cmp-speed', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true, xUnit, empty: 'No crack-tip data in these runs' });
-    const jPlot = new Plot(plotGrid, { id: 'cmp-j', title: 'J-integral: J1 (solid), J2 (dashed)', yLabel: 'J', yUnit: 'J/m²', xUnit, empty: 'No crack-tip data in these runs' });
-    plots = [speedPlot, jPlot];
+    if (!refresh) {
+      plots = [
+        new Plot(plotGrid, { id: 'cmp-speed', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true, xUnit, empty: 'No crack-tip data in these runs' }),
+        new Plot(plotGrid, { id: 'cmp-j', title: 'J-integral: J1 (solid), J2 (dashed)', yLabel: 'J', yUnit: 'J/m²', xUnit, empty: 'No crack-tip data in these runs' }),
+      ];
+      shownKey = list.join(',');
+    }
+    const [speedPlot, jPlot] = plots;
+    for (const p of plots) { p.setXUnit(xUnit); p.setXDomain(0, end); }
     // reference lines: once if every run has the same material speeds, else one set per run
     const sets = ok.map((r) => ({ r, s: sceneWaveSpeeds(r.job.scene) })).filter((x) => x.s);
     const distinct = [...new Map(sets.map((x) => [`${x.s.speeds.cL.toPrecision(6)}/${x.s.speeds.cS.toPrecision(6)}`, x])).values()];
@@ -117,11 +128,11 @@ export function compareView(main) {
       if (li && maxV > 0) li.append(h('span', { class: 'muted small-text' }, ` peak ${num(maxV, 4)} m/s${sp ? ` = ${num(maxV / sp.speeds.cS, 3)} c_S` : ''}`));
     });
     // runs still going: refresh in a while
-    if (ok.some((r) => r.job.status === 'running' || r.job.status === 'queued')) timer = setTimeout(() => { if (alive) loadPlots(); }, 4000);
+    if (ok.some((r) => r.job.status === 'running' || r.job.status === 'queued')) timer = setTimeout(() => { if (alive) loadPlots(true); }, 4000);
   }
 
   loadPicker().then(() => loadPlots());
   const destroy = () => { alive = false; clearTimeout(timer); for (const p of plots) p.destroy(); };
-  destroy.onQuery = () => loadPlots();
+  destroy.onQuery = () => loadPlots(false);
   return destroy;
 }

@@ -425,7 +425,7 @@ export function runView(main, { id }) {
     speeds = sceneWaveSpeeds(job.scene);
     const end = (job.scene && job.scene.time && job.scene.time.end) || (job.progress && job.progress.end_time) || 1e-4;
     const tu = timeUnit(end);
-    for (const p of plots) p.setXUnit(tu);
+    for (const p of plots) { p.setXUnit(tu); p.setXDomain(0, end); }
     speedPlot.setRefLines(speedRefLines(speeds && speeds.speeds));
     renderHeader();
     renderSummary();
