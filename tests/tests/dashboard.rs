@@ -49,11 +49,35 @@ fn which(names: &[&str]) -> Option<PathBuf> {
 }
 
 /// `target/<profile>/fracture`, found from this test executable (`target/<profile>/deps/…`).
+/// When it is not there yet (`cargo test -p fracture-e2e` does not build other packages'
+/// binaries), it is built with the cargo that runs this test, in the same profile.
 fn fracture_binary() -> Option<PathBuf> {
     let exe = std::env::current_exe().ok()?;
     let profile_dir = exe.parent()?.parent()?;
     let bin = profile_dir.join(if cfg!(windows) { "fracture.exe" } else { "fracture" });
-    bin.is_file().then_some(bin)
+    if bin.is_file() {
+        return Some(bin);
+    }
+    let cargo = std::env::var_os("CARGO")?;
+    let profile = profile_dir.file_name()?.to_str()?.to_string();
+    let target_dir = profile_dir.parent()?;
+    eprintln!("building the fracture binary ({profile} profile) for the dashboard test…");
+    let mut cmd = Command::new(cargo);
+    cmd.args(["build", "-p", "fracture-server", "--bin", "fracture"])
+        .arg("--target-dir")
+        .arg(target_dir)
+        .current_dir(env!("CARGO_MANIFEST_DIR"));
+    match profile.as_str() {
+        "debug" => {}
+        "release" => {
+            cmd.arg("--release");
+        }
+        other => {
+            cmd.args(["--profile", other]);
+        }
+    }
+    let ok = cmd.status().map(|s| s.success()).unwrap_or(false);
+    (ok && bin.is_file()).then_some(bin)
 }
 
 fn free_port() -> u16 {
@@ -308,8 +332,8 @@ async fn dashboard_end_to_end() {
         _ => {
             let bin = fracture_binary().unwrap_or_else(|| {
                 panic!(
-                    "the fracture binary is not next to this test ({}): build it first with \
-                     `cargo build -p fracture-server` (same profile)",
+                    "the fracture binary is not next to this test ({}) and could not be built: \
+                     run `cargo build -p fracture-server` (same profile)",
                     std::env::current_exe().map(|p| p.display().to_string()).unwrap_or_default()
                 )
             });

@@ -28,9 +28,9 @@ export function niceTicks(lo, hi, n = 5) {
   const mag = 10 ** Math.floor(Math.log10(raw));
   const step = [1, 2, 2.5, 5, 10].map((m) => m * mag).find((s) => s >= raw) || 10 * mag;
   const out = [];
-  for (let v = Math.ceil(lo / step - 1e-9) * step; v <= hi + step * 1e-9; v += step) {
-    out.push(Math.abs(v) < step * 1e-9 ? 0 : v);
-    if (out.length > 50) break;
+  const k0 = Math.ceil(lo / step - 1e-9);
+  for (let k = k0; k * step <= hi + step * 1e-9 && out.length <= 50; k++) {
+    out.push(k === 0 ? 0 : Number((k * step).toPrecision(12)));
   }
   return out;
 }
