@@ -406,6 +406,7 @@ async fn run_steps(c: &Client, base: &str) {
         .await
         .expect("read the selection");
     assert!(selected.as_str().unwrap_or_default().contains("poissons_ratio"), "jump to error selected {selected}");
+    screenshot(c, "submit-error.png", 1280, 900).await;
 
     // 2b. fixed: valid, the run size is shown; submit with labels
     set_editor(c, &serde_json::to_string_pretty(&small_scene("e2e-crack-a", 5.0)).expect("json")).await;
