@@ -120,6 +120,7 @@ fn start_server(bin: &Path, data: &Path) -> (Proc, String, Arc<Mutex<Vec<String>
         .args(["serve", "--bind", "127.0.0.1:0", "--workers", "1", "--data"])
         .arg(data)
         .env("RUST_LOG", "info")
+        .env("NO_COLOR", "1")
         .env_remove("FRACTURE_TOKEN")
         .stdin(Stdio::null())
         .stdout(Stdio::piped())

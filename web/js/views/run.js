@@ -9,14 +9,14 @@ import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, sa
 import { wallTime, labelChips } from './runs.js';
 
 const TERMINAL = new Set(['completed', 'failed', 'cancelled']);
-const COMPONENT_ORDER = ['fringe', 'sxx', 'syy', 'sxy', 'speed', 'vx', 'vy', 'ux', 'uy', 'exx', 'eyy', 'exy', 'material'];
+const COMPONENT_ORDER = ['fringe', 'sxx', 'syy', 'sxy', 'von_mises', 'speed', 'vx', 'vy', 'ux', 'uy', 'exx', 'eyy', 'exy', 'material'];
 const KIND_COMPONENTS = {
   stress: ['sxx', 'syy', 'sxy'], strain: ['exx', 'eyy', 'exy'], velocity: ['vx', 'vy', 'speed'],
   displacement: ['ux', 'uy'], fringe: ['fringe'], material: ['material'],
 };
 const COMPONENT_NAMES = {
   fringe: 'Isochromatic fringes', sxx: 'σxx', syy: 'σyy', sxy: 'σxy', speed: 'Velocity magnitude', vx: 'vx', vy: 'vy',
-  ux: 'ux', uy: 'uy', exx: 'εxx', eyy: 'εyy', exy: 'εxy', material: 'Material',
+  ux: 'ux', uy: 'uy', exx: 'εxx', eyy: 'εyy', exy: 'εxy', material: 'Material', von_mises: 'von Mises stress', umag: 'Displacement magnitude',
 };
 
 /** Rows from an SSE payload or API answer: an array, one row, or {rows|items|data: [...]}. */
