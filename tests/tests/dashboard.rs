@@ -189,27 +189,28 @@ fn start_chromedriver(driver: &Path) -> (Proc, String) {
     (proc, url)
 }
 
-/// A small edge-cracked Homalite plate pulled on two edges: a few thousand particles, about a
-/// hundred steps, snapshots with stress, velocity and fringes.
-fn small_scene(name: &str, toughness: f64) -> Value {
+/// A small edge-cracked Homalite plate pulled on two edges for 20 µs, snapshots with stress,
+/// velocity and fringes. 1 mm cells: ~5 000 particles, ~100 steps (under a second);
+/// 0.5 mm cells: ~20 000 particles, ~200 steps (a few seconds, long enough to watch live).
+fn small_scene(name: &str, toughness: f64, cell: f64) -> Value {
     json!({
         "name": name,
         "description": "Small edge-cracked plate under tension (dashboard end-to-end test).",
         "analysis": "plane_strain",
         "thickness": 0.001,
-        "grid": { "cell_size": 0.001, "min": [0.0, 0.0], "max": [0.04, 0.04] },
+        "grid": { "cell_size": cell, "min": [0.0, 0.0], "max": [0.056, 0.056] },
         "materials": { "plate": { "model": "linear_elastic", "density": 1230.0,
                                   "youngs_modulus": 5.2e9, "poissons_ratio": 0.34 } },
         "bodies": [ { "material": "plate",
-                      "region": { "rectangle": { "min": [0.002, 0.002], "max": [0.038, 0.038] } },
+                      "region": { "rectangle": { "min": [0.01, 0.01], "max": [0.046, 0.046] } },
                       "particles_per_cell": 2 } ],
-        "cracks": [ { "points": [[0.001, 0.02], [0.014, 0.02]],
+        "cracks": [ { "points": [[0.009, 0.028], [0.022, 0.028]],
                       "propagation": { "criterion": "energy_release", "toughness": toughness } } ],
         "loads": [
-            { "region": { "rectangle": { "min": [0.0, 0.036], "max": [0.04, 0.04] } },
-              "traction": [0.0, 2.0e7], "ramp_time": 1.0e-6 },
-            { "region": { "rectangle": { "min": [0.0, 0.0], "max": [0.04, 0.004] } },
-              "traction": [0.0, -2.0e7], "ramp_time": 1.0e-6 }
+            { "region": { "rectangle": { "min": [0.0, 0.044], "max": [0.056, 0.056] } },
+              "traction": [0.0, 1.0e7], "ramp_time": 1.0e-6 },
+            { "region": { "rectangle": { "min": [0.0, 0.0], "max": [0.056, 0.012] } },
+              "traction": [0.0, -1.0e7], "ramp_time": 1.0e-6 }
         ],
         "time": { "end": 2.0e-5, "cfl": 0.5 },
         "output": { "history_interval": 2.0e-7, "snapshot_interval": 5.0e-6,
@@ -393,7 +394,7 @@ async fn run_steps(c: &Client, base: &str) {
     assert!(examples.as_u64().unwrap_or(0) >= 1, "no built-in example scenes offered");
 
     // 2a. a mistake is listed with its path and marked at its line
-    let mut bad = small_scene("e2e-crack-a", 5.0);
+    let mut bad = small_scene("e2e-crack-a", 5.0, 0.0005);
     bad["materials"]["plate"]["poissons_ratio"] = json!(0.7);
     set_editor(c, &serde_json::to_string_pretty(&bad).expect("json")).await;
     click(c, "#validate-btn").await;
@@ -410,7 +411,7 @@ async fn run_steps(c: &Client, base: &str) {
     screenshot(c, "submit-error.png", 1280, 900).await;
 
     // 2b. fixed: valid, the run size is shown; submit with labels
-    set_editor(c, &serde_json::to_string_pretty(&small_scene("e2e-crack-a", 5.0)).expect("json")).await;
+    set_editor(c, &serde_json::to_string_pretty(&small_scene("e2e-crack-a", 5.0, 0.0005)).expect("json")).await;
     click(c, "#validate-btn").await;
     let size = wait_js(c, "the run size", "return document.getElementById('run-size')?.textContent;", long).await;
     assert!(size.as_str().unwrap_or_default().contains("Particles"), "run size: {size}");
@@ -427,16 +428,44 @@ async fn run_steps(c: &Client, base: &str) {
              fetch('/api/v1/jobs', {method: 'POST', headers: {'Content-Type': 'application/json'}, \
                body: JSON.stringify({scene: arguments[0], labels: {e2e: 'dashboard', case: 'b'}})}) \
              .then(r => r.json()).then(j => done(j.id)).catch(e => done('ERR ' + e));",
-            vec![small_scene("e2e-crack-b", 20.0)],
+            vec![small_scene("e2e-crack-b", 20.0, 0.001)],
         )
         .await
         .expect("submit the second run");
     let id_b = second.as_str().unwrap_or_default().to_string();
     assert!(!id_b.is_empty() && !id_b.starts_with("ERR"), "second submission: {second}");
 
-    // 3. the run page goes live to `completed` without a reload
+    // 3. the run page goes live to `completed` without a reload (run A takes a few
+    //    seconds, long enough to be seen queued or running first)
     c.execute("window.__noReload = true;", vec![]).await.expect("mark the page");
-    wait_js(c, "the run to complete", "return document.querySelector('.badge-host .badge')?.textContent === 'completed';", RUN_TIMEOUT).await;
+    let deadline = Instant::now() + RUN_TIMEOUT;
+    let mut seen = Vec::<String>::new();
+    loop {
+        let st = c
+            .execute(
+                "const b = document.querySelector('.badge-host .badge')?.textContent || ''; \
+                 const p = document.querySelector('.run-progress progress'); \
+                 return b + (p ? ' ' + p.value : '');",
+                vec![],
+            )
+            .await
+            .unwrap_or(Value::Null);
+        let st = st.as_str().unwrap_or_default().to_string();
+        if !st.is_empty() && seen.last() != Some(&st) {
+            seen.push(st.clone());
+        }
+        if st.starts_with("completed") {
+            break;
+        }
+        assert!(!st.starts_with("failed") && !st.starts_with("cancelled"), "run A ended {st}: states seen {seen:?}");
+        assert!(Instant::now() < deadline, "run A did not complete; states seen {seen:?}");
+        tokio::time::sleep(Duration::from_millis(200)).await;
+    }
+    eprintln!("run page states seen without reload: {seen:?}");
+    assert!(
+        seen.iter().any(|s| s.starts_with("queued") || s.starts_with("running")),
+        "the page never showed the run before it completed: {seen:?}"
+    );
     let same_page = c.execute("return window.__noReload === true;", vec![]).await.expect("check reload");
     assert_eq!(same_page, json!(true), "the page was reloaded");
     wait_js(c, "the crack-speed curve", "return document.querySelectorAll('#plot-speed .series path').length > 0;", long).await;
