@@ -165,3 +165,25 @@ export function prettyJson(value, indent = '') {
   if (keys.length === 0) return '{}';
   return `{\n${keys.map((k) => `${inner}${JSON.stringify(k)}: ${prettyJson(value[k], inner)}`).join(',\n')}\n${indent}}`;
 }
+
+const SCENE_ORDER = ['name', 'description', 'analysis', 'thickness', 'grid', 'materials', 'bodies', 'cracks', 'boundary_conditions', 'loads', 'damping', 'time', 'output'];
+const FIRST_KEYS = ['model', 'material', 'region', 'points', 'cell_size', 'criterion', 'law', 'kind', 'end'];
+
+/**
+ * A scene with its keys in the order of scene-format.md (servers may hand them back sorted
+ * alphabetically), and `model`, `material`, `region`… first in nested objects. Values are
+ * unchanged.
+ */
+export function orderScene(scene) {
+  const rank = (order) => (k) => { const i = order.indexOf(k); return i < 0 ? order.length : i; };
+  const walk = (v, top) => {
+    if (Array.isArray(v)) return v.map((x) => walk(x, false));
+    if (!v || typeof v !== 'object') return v;
+    const r = rank(top ? SCENE_ORDER : FIRST_KEYS);
+    const keys = Object.keys(v).sort((a, b) => r(a) - r(b));
+    const out = {};
+    for (const k of keys) out[k] = walk(v[k], false);
+    return out;
+  };
+  return walk(scene, true);
+}

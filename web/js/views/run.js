@@ -5,7 +5,7 @@
 import * as api from '../api.js';
 import { Plot, PALETTE, DASHES } from '../plot.js';
 import { sceneWaveSpeeds, speedRefLines } from '../waves.js';
-import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson } from '../util.js';
+import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson, orderScene } from '../util.js';
 import { wallTime, labelChips } from './runs.js';
 
 const TERMINAL = new Set(['completed', 'failed', 'cancelled']);
@@ -227,7 +227,7 @@ export function runView(main, { id }) {
   }
 
   function renderScene() {
-    const text = prettyJson(job.scene ?? null);
+    const text = prettyJson(job.scene ? orderScene(job.scene) : null);
     replace(sceneHost, h('h2', { id: 'scene-h' }, 'Scene'),
       job.scene && job.scene.description ? h('p', {}, job.scene.description) : null,
       h('details', {}, h('summary', {}, 'Scene JSON'), h('pre', { class: 'json', tabindex: 0 }, text)),

@@ -2,7 +2,7 @@
 // (each error listed with its path and marked at its line), see the run size, submit.
 
 import * as api from '../api.js';
-import { h, replace, count, si, parseLabels, hashQuery, notify, prettyJson } from '../util.js';
+import { h, replace, count, si, parseLabels, hashQuery, notify, prettyJson, orderScene } from '../util.js';
 import { locate, syntaxErrorPosition } from '../jsonlocate.js';
 
 export function submitView(main) {
@@ -199,7 +199,7 @@ export function submitView(main) {
 
   // ---- examples -------------------------------------------------------------------------
   function setText(obj) {
-    textarea.value = prettyJson(obj);
+    textarea.value = prettyJson(orderScene(obj));
     marks = [];
     result.replaceChildren();
     renderDecor();
