@@ -492,6 +492,24 @@ async fn run_steps(c: &Client, base: &str) {
     .await
     .expect("hover the speed plot");
     wait_js(c, "the hover readout", "const t = document.querySelector('#plot-speed .plot-tip'); return !t.hidden && t.textContent.includes('m/s');", long).await;
+    // drag to zoom on time, double-click to reset
+    c.execute(
+        "const a = document.querySelector('#plot-energy .plot-area'); const r = a.getBoundingClientRect(); \
+         const ev = (type, f) => a.dispatchEvent(new PointerEvent(type, {clientX: r.left + r.width * f, clientY: r.top + 60, bubbles: true, pointerType: 'mouse', button: 0, pointerId: 1})); \
+         ev('pointerdown', 0.3); ev('pointermove', 0.45); ev('pointermove', 0.6); ev('pointerup', 0.6);",
+        vec![],
+    )
+    .await
+    .expect("drag on the energy plot");
+    wait_js(c, "zoomed (Reset zoom shown)", "return !document.querySelector('#plot-energy .plot-head button').hidden;", long).await;
+    c.execute("document.querySelector('#plot-energy .plot-area').dispatchEvent(new MouseEvent('dblclick', {bubbles: true}));", vec![])
+        .await
+        .expect("double-click");
+    wait_js(c, "zoom reset", "return document.querySelector('#plot-energy .plot-head button').hidden;", long).await;
+    // the keyboard reads values too
+    let area = c.find(Locator::Css("#plot-j .plot-area")).await.expect("J plot");
+    area.send_keys("\u{E014}\u{E014}").await.expect("arrow keys on the J plot");
+    wait_js(c, "the keyboard readout", "const t = document.querySelector('#plot-j .plot-tip'); return !t.hidden && t.textContent.includes('J1');", long).await;
     assert_no_console_errors(c, "run page").await;
     screenshot(c, "run.png", 1280, 2400).await;
     c.set_window_size(1280, 900).await.expect("resize window");
