@@ -511,7 +511,8 @@ async fn run_steps(c: &Client, base: &str) {
     area.send_keys("\u{E014}\u{E014}").await.expect("arrow keys on the J plot");
     wait_js(c, "the keyboard readout", "const t = document.querySelector('#plot-j .plot-tip'); return !t.hidden && t.textContent.includes('J1');", long).await;
     assert_no_console_errors(c, "run page").await;
-    screenshot(c, "run.png", 1280, 2400).await;
+    c.execute("document.activeElement?.blur(); window.scrollTo(0, 0);", vec![]).await.expect("scroll to the top");
+    screenshot(c, "run.png", 1280, 3000).await;
     c.set_window_size(1280, 900).await.expect("resize window");
 
     // 4. the list shows both runs; select them and compare
