@@ -555,4 +555,33 @@ async fn run_steps(c: &Client, base: &str) {
     click(c, "#cmp-speed .legend-item").await;
     assert_no_console_errors(c, "compare view").await;
     screenshot(c, "compare.png", 1280, 1100).await;
+
+    // 5. cancel a long run from its page, then delete it
+    let long_id = c
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             fetch('/api/v1/jobs', {method: 'POST', headers: {'Content-Type': 'application/json'}, \
+               body: JSON.stringify(arguments[0])}).then(r => r.json()).then(j => done(j.id)).catch(e => done('ERR ' + e));",
+            vec![{
+                let mut s = small_scene("e2e-cancel-me", 5.0, 0.00025);
+                s["time"]["end"] = json!(1.0e-4);
+                s
+            }],
+        )
+        .await
+        .expect("submit a long run");
+    let long_id = long_id.as_str().unwrap_or_default().to_string();
+    assert!(!long_id.is_empty() && !long_id.starts_with("ERR"), "long run: {long_id}");
+    c.goto(&format!("{base}/#/runs/{long_id}")).await.expect("open the long run");
+    click(c, "#cancel-run").await;
+    wait_js(c, "the run cancelled", "return document.querySelector('.badge-host .badge')?.textContent === 'cancelled';", long).await;
+    click(c, "#delete-run").await;
+    c.accept_alert().await.expect("confirm the deletion");
+    wait_js(c, "back on the list", "return location.hash.startsWith('#/runs') && !location.hash.startsWith('#/runs/') && document.querySelector('.table-host')?.getAttribute('aria-busy') === 'false';", long).await;
+    let gone = c
+        .execute(&format!("return !document.querySelector('tr[data-id=\"{long_id}\"]');"), vec![])
+        .await
+        .expect("look for the deleted run");
+    assert_eq!(gone, json!(true), "the deleted run is still listed");
+    assert_no_console_errors(c, "cancel and delete").await;
 }
