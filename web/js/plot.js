@@ -161,9 +161,11 @@ export class Plot {
 
   layout() {
     // room on the right for the reference-line labels
-    const longest = Math.max(0, ...this.refLines.map((r) => `${r.label} ${num(r.y, 4)}`.length));
-    this.M.right = longest ? Math.min(160, 10 + longest * 6.3) : 16;
     const width = Math.max(240, this.svgHost.clientWidth || 600);
+    const longest = Math.max(0, ...this.refLines.map((r) => `${r.label} ${num(r.y, 4)}`.length));
+    // narrow (phone) plots keep the labels inside the frame instead of a wide margin
+    this.labelsInside = width < 520;
+    this.M.right = longest && !this.labelsInside ? Math.min(160, 10 + longest * 6.3) : 16;
     const height = this.o.height;
     let full = this.dataXRange();
     // a known time span (0 … end time) keeps the axis still while a live run fills it
@@ -236,7 +238,11 @@ export class Plot {
       parts.push('</g><g class="ref-label">');
       labels.sort((a, b) => a.y - b.y);
       for (let i = 1; i < labels.length; i++) labels[i].y = Math.max(labels[i].y, labels[i - 1].y + 11);
-      for (const l of labels) parts.push(`<text x="${this.M.left + pw + 4}" y="${(l.y + 3.5).toFixed(1)}">${esc(l.text)}</text>`);
+      for (const l of labels) {
+        parts.push(this.labelsInside
+          ? `<text x="${this.M.left + pw - 3}" y="${(l.y - 2.5).toFixed(1)}" text-anchor="end">${esc(l.text)}</text>`
+          : `<text x="${this.M.left + pw + 4}" y="${(l.y + 3.5).toFixed(1)}">${esc(l.text)}</text>`);
+      }
       parts.push('</g>');
     }
     // series
