@@ -54,7 +54,11 @@ fn which(names: &[&str]) -> Option<PathBuf> {
 fn fracture_binary() -> Option<PathBuf> {
     let exe = std::env::current_exe().ok()?;
     let profile_dir = exe.parent()?.parent()?;
-    let bin = profile_dir.join(if cfg!(windows) { "fracture.exe" } else { "fracture" });
+    let bin = profile_dir.join(if cfg!(windows) {
+        "fracture.exe"
+    } else {
+        "fracture"
+    });
     if bin.is_file() {
         return Some(bin);
     }
@@ -91,7 +95,11 @@ fn http_status(base: &str, path: &str) -> Option<u16> {
     let hostport = base.trim_start_matches("http://").trim_end_matches('/');
     let mut s = TcpStream::connect(hostport).ok()?;
     s.set_read_timeout(Some(Duration::from_secs(5))).ok()?;
-    write!(s, "GET {path} HTTP/1.1\r\nHost: {hostport}\r\nConnection: close\r\n\r\n").ok()?;
+    write!(
+        s,
+        "GET {path} HTTP/1.1\r\nHost: {hostport}\r\nConnection: close\r\n\r\n"
+    )
+    .ok()?;
     let mut line = String::new();
     BufReader::new(s).read_line(&mut line).ok()?;
     line.split_whitespace().nth(1)?.parse().ok()
@@ -147,7 +155,10 @@ fn start_server(bin: &Path, data: &Path) -> (Proc, String, Arc<Mutex<Vec<String>
     let deadline = Instant::now() + Duration::from_secs(60);
     let url = loop {
         if let Ok(Some(status)) = proc.0.try_wait() {
-            panic!("fracture serve exited early ({status}); log:\n{}", log.lock().map(|l| l.join("\n")).unwrap_or_default());
+            panic!(
+                "fracture serve exited early ({status}); log:\n{}",
+                log.lock().map(|l| l.join("\n")).unwrap_or_default()
+            );
         }
         match rx.recv_timeout(Duration::from_millis(200)) {
             Ok(line) => {
@@ -164,7 +175,10 @@ fn start_server(bin: &Path, data: &Path) -> (Proc, String, Arc<Mutex<Vec<String>
     };
     let deadline = Instant::now() + Duration::from_secs(30);
     while http_status(&url, "/api/v1/health") != Some(200) {
-        assert!(Instant::now() < deadline, "{url}/api/v1/health never answered 200");
+        assert!(
+            Instant::now() < deadline,
+            "{url}/api/v1/health never answered 200"
+        );
         std::thread::sleep(Duration::from_millis(200));
     }
     (proc, url, log)
@@ -245,8 +259,21 @@ async fn wait_js(c: &Client, what: &str, script: &str, timeout: Duration) -> Val
 
 /// Errors the page recorded (web/js/errors.js wraps console.error and window.onerror).
 async fn console_errors(c: &Client) -> Vec<String> {
-    match c.execute("return window.__dashboardErrors || ['errors.js not loaded'];", vec![]).await {
-        Ok(Value::Array(a)) => a.iter().map(|v| v.as_str().map(str::to_string).unwrap_or_else(|| v.to_string())).collect(),
+    match c
+        .execute(
+            "return window.__dashboardErrors || ['errors.js not loaded'];",
+            vec![],
+        )
+        .await
+    {
+        Ok(Value::Array(a)) => a
+            .iter()
+            .map(|v| {
+                v.as_str()
+                    .map(str::to_string)
+                    .unwrap_or_else(|| v.to_string())
+            })
+            .collect(),
         Ok(v) => vec![format!("unexpected error list {v}")],
         Err(e) => vec![format!("could not read the error list: {e}")],
     }
@@ -258,11 +285,18 @@ async fn browser_log_errors(c: &Client) -> Vec<String> {
     #[derive(Debug)]
     struct GetLog;
     impl fantoccini::wd::WebDriverCompatibleCommand for GetLog {
-        fn endpoint(&self, base: &url::Url, session: Option<&str>) -> Result<url::Url, url::ParseError> {
+        fn endpoint(
+            &self,
+            base: &url::Url,
+            session: Option<&str>,
+        ) -> Result<url::Url, url::ParseError> {
             base.join(&format!("session/{}/se/log", session.unwrap_or_default()))
         }
         fn method_and_body(&self, _: &url::Url) -> (http::Method, Option<String>) {
-            (http::Method::POST, Some(r#"{"type":"browser"}"#.to_string()))
+            (
+                http::Method::POST,
+                Some(r#"{"type":"browser"}"#.to_string()),
+            )
         }
     }
     match c.issue_cmd(GetLog).await {
@@ -281,13 +315,18 @@ async fn browser_log_errors(c: &Client) -> Vec<String> {
 async fn assert_no_console_errors(c: &Client, stage: &str) {
     let mut errors = console_errors(c).await;
     errors.extend(browser_log_errors(c).await);
-    assert!(errors.is_empty(), "browser console errors at {stage}: {errors:#?}");
+    assert!(
+        errors.is_empty(),
+        "browser console errors at {stage}: {errors:#?}"
+    );
 }
 
 async fn screenshot(c: &Client, name: &str, width: u32, height: u32) {
     let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("screenshots");
     std::fs::create_dir_all(&dir).expect("create tests/screenshots");
-    c.set_window_size(width, height).await.expect("resize window");
+    c.set_window_size(width, height)
+        .await
+        .expect("resize window");
     tokio::time::sleep(Duration::from_millis(600)).await; // plots redraw on resize
     let png = c.screenshot().await.expect("take screenshot");
     std::fs::write(dir.join(name), png).expect("write screenshot");
@@ -317,9 +356,10 @@ async fn click(c: &Client, css: &str) {
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
 async fn dashboard_end_to_end() {
-    let (Some(chromium), Some(driver)) =
-        (which(&["chromium", "chromium-browser", "google-chrome"]), which(&["chromedriver"]))
-    else {
+    let (Some(chromium), Some(driver)) = (
+        which(&["chromium", "chromium-browser", "google-chrome"]),
+        which(&["chromedriver"]),
+    ) else {
         eprintln!(
             "SKIPPED dashboard_end_to_end: chromium and chromedriver are not installed \
              (apt-get install -y chromium chromium-driver)"
@@ -336,7 +376,9 @@ async fn dashboard_end_to_end() {
                 panic!(
                     "the fracture binary is not next to this test ({}) and could not be built: \
                      run `cargo build -p fracture-server` (same profile)",
-                    std::env::current_exe().map(|p| p.display().to_string()).unwrap_or_default()
+                    std::env::current_exe()
+                        .map(|p| p.display().to_string())
+                        .unwrap_or_default()
                 )
             });
             let (p, url, _log) = start_server(&bin, &tmp.path().join("data"));
@@ -383,15 +425,32 @@ async fn run_steps(c: &Client, base: &str) {
     let long = Duration::from_secs(20);
 
     // 1. the runs list
-    c.goto(&format!("{base}/#/runs")).await.expect("open the dashboard");
+    c.goto(&format!("{base}/#/runs"))
+        .await
+        .expect("open the dashboard");
     wait_js(c, "the runs list", "return document.querySelector('h1')?.textContent === 'Runs' && document.querySelector('.table-host')?.getAttribute('aria-busy') === 'false';", long).await;
     assert_no_console_errors(c, "runs list").await;
 
     // 2. the submit form, starting from a built-in example
     click(c, "a[data-nav=submit]").await;
-    wait_js(c, "an example scene in the editor", "return document.getElementById('scene-json')?.value.length > 10;", long).await;
-    let examples = wait_js(c, "the example list", "return document.querySelectorAll('#example option').length;", long).await;
-    assert!(examples.as_u64().unwrap_or(0) >= 1, "no built-in example scenes offered");
+    wait_js(
+        c,
+        "an example scene in the editor",
+        "return document.getElementById('scene-json')?.value.length > 10;",
+        long,
+    )
+    .await;
+    let examples = wait_js(
+        c,
+        "the example list",
+        "return document.querySelectorAll('#example option').length;",
+        long,
+    )
+    .await;
+    assert!(
+        examples.as_u64().unwrap_or(0) >= 1,
+        "no built-in example scenes offered"
+    );
 
     // 2a. a mistake is listed with its path and marked at its line
     let mut bad = small_scene("e2e-crack-a", 5.0, 0.0005);
@@ -399,27 +458,71 @@ async fn run_steps(c: &Client, base: &str) {
     set_editor(c, &serde_json::to_string_pretty(&bad).expect("json")).await;
     click(c, "#validate-btn").await;
     let listed = wait_js(c, "the validation error list", "return [...document.querySelectorAll('.error-list li')].map(li => li.textContent).join('\\n');", long).await;
-    assert!(listed.as_str().unwrap_or_default().contains("materials.plate.poissons_ratio"), "error list: {listed}");
+    assert!(
+        listed
+            .as_str()
+            .unwrap_or_default()
+            .contains("materials.plate.poissons_ratio"),
+        "error list: {listed}"
+    );
     let marked = wait_js(c, "the marked error line", "return [...document.querySelectorAll('.editor-backdrop mark')].map(m => m.textContent).join('\\n');", long).await;
-    assert!(marked.as_str().unwrap_or_default().contains("poissons_ratio"), "marked line: {marked}");
+    assert!(
+        marked
+            .as_str()
+            .unwrap_or_default()
+            .contains("poissons_ratio"),
+        "marked line: {marked}"
+    );
     click(c, ".error-list li button").await;
     let selected = c
         .execute("const t = document.getElementById('scene-json'); return document.activeElement === t && t.value.slice(t.selectionStart, t.selectionEnd);", vec![])
         .await
         .expect("read the selection");
-    assert!(selected.as_str().unwrap_or_default().contains("poissons_ratio"), "jump to error selected {selected}");
+    assert!(
+        selected
+            .as_str()
+            .unwrap_or_default()
+            .contains("poissons_ratio"),
+        "jump to error selected {selected}"
+    );
     screenshot(c, "submit-error.png", 1280, 900).await;
 
     // 2b. fixed: valid, the run size is shown; submit with labels
-    set_editor(c, &serde_json::to_string_pretty(&small_scene("e2e-crack-a", 5.0, 0.0005)).expect("json")).await;
+    set_editor(
+        c,
+        &serde_json::to_string_pretty(&small_scene("e2e-crack-a", 5.0, 0.0005)).expect("json"),
+    )
+    .await;
     click(c, "#validate-btn").await;
-    let size = wait_js(c, "the run size", "return document.getElementById('run-size')?.textContent;", long).await;
-    assert!(size.as_str().unwrap_or_default().contains("Particles"), "run size: {size}");
+    let size = wait_js(
+        c,
+        "the run size",
+        "return document.getElementById('run-size')?.textContent;",
+        long,
+    )
+    .await;
+    assert!(
+        size.as_str().unwrap_or_default().contains("Particles"),
+        "run size: {size}"
+    );
     let labels = c.find(Locator::Css("#labels")).await.expect("labels field");
-    labels.send_keys("e2e:dashboard, case:a").await.expect("type labels");
+    labels
+        .send_keys("e2e:dashboard, case:a")
+        .await
+        .expect("type labels");
     click(c, "#submit-btn").await;
-    let hash = wait_js(c, "the new run's page", "return /^#\\/runs\\/./.test(location.hash) && location.hash;", long).await;
-    let id_a = hash.as_str().unwrap_or_default().trim_start_matches("#/runs/").to_string();
+    let hash = wait_js(
+        c,
+        "the new run's page",
+        "return /^#\\/runs\\/./.test(location.hash) && location.hash;",
+        long,
+    )
+    .await;
+    let id_a = hash
+        .as_str()
+        .unwrap_or_default()
+        .trim_start_matches("#/runs/")
+        .to_string();
 
     // a second run to compare with (through the API from the page, same origin)
     let second = c
@@ -433,11 +536,16 @@ async fn run_steps(c: &Client, base: &str) {
         .await
         .expect("submit the second run");
     let id_b = second.as_str().unwrap_or_default().to_string();
-    assert!(!id_b.is_empty() && !id_b.starts_with("ERR"), "second submission: {second}");
+    assert!(
+        !id_b.is_empty() && !id_b.starts_with("ERR"),
+        "second submission: {second}"
+    );
 
     // 3. the run page goes live to `completed` without a reload (run A takes a few
     //    seconds, long enough to be seen queued or running first)
-    c.execute("window.__noReload = true;", vec![]).await.expect("mark the page");
+    c.execute("window.__noReload = true;", vec![])
+        .await
+        .expect("mark the page");
     let deadline = Instant::now() + RUN_TIMEOUT;
     let mut seen = Vec::<String>::new();
     loop {
@@ -457,26 +565,51 @@ async fn run_steps(c: &Client, base: &str) {
         if st.starts_with("completed") {
             break;
         }
-        assert!(!st.starts_with("failed") && !st.starts_with("cancelled"), "run A ended {st}: states seen {seen:?}");
-        assert!(Instant::now() < deadline, "run A did not complete; states seen {seen:?}");
+        assert!(
+            !st.starts_with("failed") && !st.starts_with("cancelled"),
+            "run A ended {st}: states seen {seen:?}"
+        );
+        assert!(
+            Instant::now() < deadline,
+            "run A did not complete; states seen {seen:?}"
+        );
         tokio::time::sleep(Duration::from_millis(200)).await;
     }
     eprintln!("run page states seen without reload: {seen:?}");
     assert!(
-        seen.iter().any(|s| s.starts_with("queued") || s.starts_with("running")),
+        seen.iter()
+            .any(|s| s.starts_with("queued") || s.starts_with("running")),
         "the page never showed the run before it completed: {seen:?}"
     );
-    let same_page = c.execute("return window.__noReload === true;", vec![]).await.expect("check reload");
+    let same_page = c
+        .execute("return window.__noReload === true;", vec![])
+        .await
+        .expect("check reload");
     assert_eq!(same_page, json!(true), "the page was reloaded");
-    wait_js(c, "the crack-speed curve", "return document.querySelectorAll('#plot-speed .series path').length > 0;", long).await;
+    wait_js(
+        c,
+        "the crack-speed curve",
+        "return document.querySelectorAll('#plot-speed .series path').length > 0;",
+        long,
+    )
+    .await;
     let refs = c
         .execute("return [...document.querySelectorAll('#plot-speed .ref-label text')].map(t => t.textContent).join('|');", vec![])
         .await
         .expect("reference labels");
     for label in ["c_R", "c_S", "√2·c_S", "c_L"] {
-        assert!(refs.as_str().unwrap_or_default().contains(label), "speed plot lacks {label}: {refs}");
+        assert!(
+            refs.as_str().unwrap_or_default().contains(label),
+            "speed plot lacks {label}: {refs}"
+        );
     }
-    wait_js(c, "the energy curves", "return document.querySelectorAll('#plot-energy .series path').length >= 4;", long).await;
+    wait_js(
+        c,
+        "the energy curves",
+        "return document.querySelectorAll('#plot-energy .series path').length >= 4;",
+        long,
+    )
+    .await;
     // the fringe picture
     wait_js(c, "snapshots", "return [...document.querySelectorAll('#snap-component option')].some(o => o.value === 'fringe');", long).await;
     c.execute("const s = document.getElementById('snap-component'); s.value = 'fringe'; s.dispatchEvent(new Event('change'));", vec![])
@@ -501,17 +634,39 @@ async fn run_steps(c: &Client, base: &str) {
     )
     .await
     .expect("drag on the energy plot");
-    wait_js(c, "zoomed (Reset zoom shown)", "return !document.querySelector('#plot-energy .plot-head button').hidden;", long).await;
+    wait_js(
+        c,
+        "zoomed (Reset zoom shown)",
+        "return !document.querySelector('#plot-energy .plot-head button').hidden;",
+        long,
+    )
+    .await;
     c.execute("document.querySelector('#plot-energy .plot-area').dispatchEvent(new MouseEvent('dblclick', {bubbles: true}));", vec![])
         .await
         .expect("double-click");
-    wait_js(c, "zoom reset", "return document.querySelector('#plot-energy .plot-head button').hidden;", long).await;
+    wait_js(
+        c,
+        "zoom reset",
+        "return document.querySelector('#plot-energy .plot-head button').hidden;",
+        long,
+    )
+    .await;
     // the keyboard reads values too
-    let area = c.find(Locator::Css("#plot-j .plot-area")).await.expect("J plot");
-    area.send_keys("\u{E014}\u{E014}").await.expect("arrow keys on the J plot");
+    let area = c
+        .find(Locator::Css("#plot-j .plot-area"))
+        .await
+        .expect("J plot");
+    area.send_keys("\u{E014}\u{E014}")
+        .await
+        .expect("arrow keys on the J plot");
     wait_js(c, "the keyboard readout", "const t = document.querySelector('#plot-j .plot-tip'); return !t.hidden && t.textContent.includes('J1');", long).await;
     assert_no_console_errors(c, "run page").await;
-    c.execute("document.activeElement?.blur(); window.scrollTo(0, 0);", vec![]).await.expect("scroll to the top");
+    c.execute(
+        "document.activeElement?.blur(); window.scrollTo(0, 0);",
+        vec![],
+    )
+    .await
+    .expect("scroll to the top");
     screenshot(c, "run.png", 1280, 3000).await;
     c.set_window_size(1280, 900).await.expect("resize window");
 
@@ -533,17 +688,38 @@ async fn run_steps(c: &Client, base: &str) {
         click(c, &format!("tr[data-id=\"{id}\"] input[type=checkbox]")).await;
     }
     click(c, ".page-head .actions button").await;
-    wait_js(c, "the compare view", "return location.hash.startsWith('#/compare?ids=');", long).await;
+    wait_js(
+        c,
+        "the compare view",
+        "return location.hash.startsWith('#/compare?ids=');",
+        long,
+    )
+    .await;
     wait_js(c, "two runs in the speed overlay", "return document.querySelectorAll('#cmp-speed .legend-item').length >= 2 && document.querySelectorAll('#cmp-speed .series path').length >= 2;", long).await;
     let legend = c
         .execute("return [...document.querySelectorAll('#cmp-speed .legend-item')].map(b => b.textContent).join('|');", vec![])
         .await
         .expect("legend");
     let legend = legend.as_str().unwrap_or_default().to_string();
-    assert!(legend.contains("e2e-crack-a") && legend.contains("e2e-crack-b"), "compare legend: {legend}");
-    wait_js(c, "the J overlay", "return document.querySelectorAll('#cmp-j .series path').length >= 2;", long).await;
+    assert!(
+        legend.contains("e2e-crack-a") && legend.contains("e2e-crack-b"),
+        "compare legend: {legend}"
+    );
+    wait_js(
+        c,
+        "the J overlay",
+        "return document.querySelectorAll('#cmp-j .series path').length >= 2;",
+        long,
+    )
+    .await;
     // a legend button hides its series
-    let before = c.execute("return document.querySelectorAll('#cmp-speed .series path').length;", vec![]).await.expect("count");
+    let before = c
+        .execute(
+            "return document.querySelectorAll('#cmp-speed .series path').length;",
+            vec![],
+        )
+        .await
+        .expect("count");
     click(c, "#cmp-speed .legend-item").await;
     wait_js(
         c,
@@ -571,15 +747,29 @@ async fn run_steps(c: &Client, base: &str) {
         .await
         .expect("submit a long run");
     let long_id = long_id.as_str().unwrap_or_default().to_string();
-    assert!(!long_id.is_empty() && !long_id.starts_with("ERR"), "long run: {long_id}");
-    c.goto(&format!("{base}/#/runs/{long_id}")).await.expect("open the long run");
+    assert!(
+        !long_id.is_empty() && !long_id.starts_with("ERR"),
+        "long run: {long_id}"
+    );
+    c.goto(&format!("{base}/#/runs/{long_id}"))
+        .await
+        .expect("open the long run");
     click(c, "#cancel-run").await;
-    wait_js(c, "the run cancelled", "return document.querySelector('.badge-host .badge')?.textContent === 'cancelled';", long).await;
+    wait_js(
+        c,
+        "the run cancelled",
+        "return document.querySelector('.badge-host .badge')?.textContent === 'cancelled';",
+        long,
+    )
+    .await;
     click(c, "#delete-run").await;
     c.accept_alert().await.expect("confirm the deletion");
     wait_js(c, "back on the list", "return location.hash.startsWith('#/runs') && !location.hash.startsWith('#/runs/') && document.querySelector('.table-host')?.getAttribute('aria-busy') === 'false';", long).await;
     let gone = c
-        .execute(&format!("return !document.querySelector('tr[data-id=\"{long_id}\"]');"), vec![])
+        .execute(
+            &format!("return !document.querySelector('tr[data-id=\"{long_id}\"]');"),
+            vec![],
+        )
         .await
         .expect("look for the deleted run");
     assert_eq!(gone, json!(true), "the deleted run is still listed");
