@@ -1,0 +1,432 @@
+// A small interactive SVG line plot, written for this dashboard (no third-party code).
+//
+// - series toggled from the legend (real buttons, aria-pressed)
+// - hover (mouse, touch or keyboard arrows) shows every visible series' value at that time
+// - drag across the plot to zoom on time; double-click, Escape or "Reset zoom" to reset;
+//   + / − zoom around the cursor from the keyboard
+// - labelled horizontal reference lines (wave speeds)
+// - live: `push`/`setData` then the plot redraws on the next animation frame
+// - many points are reduced to first/min/max/last per pixel column before drawing
+
+import { h, num, siPrefix } from './util.js';
+
+/** Colour-blind-safe palette (Okabe & Ito) plus a few extra hues. */
+export const PALETTE = ['#0072B2', '#D55E00', '#009E73', '#CC79A7', '#E69F00', '#56B4E9', '#7F3C8D', '#4D4D4D', '#A6761D', '#1B9E77'];
+export const DASHES = ['', '6 3', '2 3', '8 3 2 3'];
+
+const M = { left: 58, right: 16, top: 12, bottom: 38 };
+let plotCounter = 0;
+
+function esc(s) {
+  return String(s).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c]));
+}
+
+/** About `n` "nice" ticks (1, 2, 5 × 10^k) covering [lo, hi]. */
+export function niceTicks(lo, hi, n = 5) {
+  if (!(hi > lo)) return [lo];
+  const raw = (hi - lo) / Math.max(1, n);
+  const mag = 10 ** Math.floor(Math.log10(raw));
+  const step = [1, 2, 2.5, 5, 10].map((m) => m * mag).find((s) => s >= raw) || 10 * mag;
+  const out = [];
+  const k0 = Math.ceil(lo / step - 1e-9);
+  for (let k = k0; k * step <= hi + step * 1e-9 && out.length <= 50; k++) {
+    out.push(k === 0 ? 0 : Number((k * step).toPrecision(12)));
+  }
+  return out;
+}
+
+/** Index of the sample of sorted `xs` nearest to x. */
+function nearest(xs, x) {
+  let lo = 0, hi = xs.length - 1;
+  if (hi < 0) return -1;
+  while (hi - lo > 1) {
+    const mid = (lo + hi) >> 1;
+    if (xs[mid] < x) lo = mid; else hi = mid;
+  }
+  return Math.abs(xs[lo] - x) <= Math.abs(xs[hi] - x) ? lo : hi;
+}
+
+/** First index with xs[i] >= x. */
+function lowerBound(xs, x) {
+  let lo = 0, hi = xs.length;
+  while (lo < hi) {
+    const mid = (lo + hi) >> 1;
+    if (xs[mid] < x) lo = mid + 1; else hi = mid;
+  }
+  return lo;
+}
+
+export class Plot {
+  /**
+   * @param {HTMLElement} parent where the plot's <figure> is appended
+   * @param {object} o title, xLabel, xUnit {factor, unit} (display = value / factor),
+   *   yLabel, yUnit (base unit, SI prefix chosen automatically unless yPrefix === false),
+   *   yZero (keep 0 in range), refLines [{y, label}], height, empty (text when no data)
+   */
+  constructor(parent, o = {}) {
+    this.M = { ...M };
+    this.o = { height: 260, xLabel: 'time', xUnit: { factor: 1, unit: 's' }, yUnit: '', yPrefix: true, yZero: false, empty: 'No data yet', ...o };
+    this.series = [];
+    this.refLines = o.refLines || [];
+    this.zoom = null;
+    this.cursorX = null; // hovered data x, or null
+    this.frame = 0;
+    this.id = `plot${++plotCounter}`;
+    this.reset = h('button', { type: 'button', class: 'small', hidden: true, onclick: () => this.resetZoom() }, 'Reset zoom');
+    this.svgHost = h('div', {
+      class: 'plot-area', tabindex: 0, role: 'group', 'aria-roledescription': 'interactive plot',
+      'aria-label': `${o.title || 'plot'}: drag or use + and − to zoom on time, double-click or Escape to reset, arrow keys to read values`,
+    });
+    this.tip = h('div', { class: 'plot-tip', hidden: true, 'aria-live': 'polite', id: `${this.id}-tip` });
+    this.svgHost.setAttribute('aria-describedby', this.tip.id);
+    this.legend = h('div', { class: 'legend', role: 'group', 'aria-label': `${o.title || 'plot'} series` });
+    this.root = h('figure', { class: 'plot', id: o.id || this.id },
+      h('figcaption', { class: 'plot-head' }, h('span', { class: 'plot-title' }, o.title || ''), this.reset),
+      h('div', { class: 'plot-wrap' }, this.svgHost, this.tip),
+      this.legend);
+    parent.append(this.root);
+    this.bindEvents();
+    this.ro = new ResizeObserver(() => {
+      const w = this.svgHost.clientWidth;
+      if (w !== this.lastWidth) this.update();
+    });
+    this.ro.observe(this.svgHost);
+    this.update();
+  }
+
+  /** Stop observing (call when the view goes away). */
+  destroy() {
+    this.ro.disconnect();
+    cancelAnimationFrame(this.frame);
+  }
+
+  /** Find or add a series. New series get the next palette colour unless given one. */
+  ensure(key, { name = key, color, dash = '', visible = true } = {}) {
+    let s = this.series.find((x) => x.key === key);
+    if (!s) {
+      s = { key, name, color: color || PALETTE[this.series.length % PALETTE.length], dash, visible, xs: [], ys: [] };
+      this.series.push(s);
+      this.legendDirty = true;
+      this.update();
+    }
+    return s;
+  }
+
+  /** Replace a series' samples (xs ascending). */
+  setData(key, xs, ys, style) {
+    const s = this.ensure(key, style);
+    s.xs = xs;
+    s.ys = ys;
+    this.update();
+  }
+
+  /** Append one sample (ignored unless x is after the last one). */
+  push(key, x, y, style) {
+    const s = this.ensure(key, style);
+    const n = s.xs.length;
+    if (n && x <= s.xs[n - 1]) return;
+    s.xs.push(x);
+    s.ys.push(y);
+    this.update();
+  }
+
+  setRefLines(lines) { this.refLines = lines || []; this.update(); }
+  setXUnit(u) { this.o.xUnit = u; this.update(); }
+  /** Fix the unzoomed time axis to [t0, t1] (widened if data fall outside). */
+  setXDomain(t0, t1) { this.o.xDomain = Number.isFinite(t0) && Number.isFinite(t1) && t1 > t0 ? [t0, t1] : null; this.update(); }
+  clear() { this.series = []; this.legendDirty = true; this.update(); }
+
+  resetZoom() {
+    this.zoom = null;
+    this.update();
+  }
+
+  /** Schedule a redraw on the next animation frame. */
+  update() {
+    if (this.frame) return;
+    this.frame = requestAnimationFrame(() => { this.frame = 0; this.render(); });
+  }
+
+  // ---- layout ---------------------------------------------------------------------------
+
+  dataXRange() {
+    let lo = Infinity, hi = -Infinity;
+    for (const s of this.series) {
+      if (!s.visible || !s.xs.length) continue;
+      lo = Math.min(lo, s.xs[0]);
+      hi = Math.max(hi, s.xs[s.xs.length - 1]);
+    }
+    return lo <= hi ? [lo, hi] : null;
+  }
+
+  layout() {
+    // room on the right for the reference-line labels
+    const width = Math.max(240, this.svgHost.clientWidth || 600);
+    const longest = Math.max(0, ...this.refLines.map((r) => `${r.label} ${num(r.y, 4)}`.length));
+    // narrow (phone) plots keep the labels inside the frame instead of a wide margin
+    this.labelsInside = width < 520;
+    this.M.right = longest && !this.labelsInside ? Math.min(160, 10 + longest * 6.3) : 16;
+    const height = this.o.height;
+    let full = this.dataXRange();
+    // a known time span (0 … end time) keeps the axis still while a live run fills it
+    const d = this.o.xDomain;
+    if (d) full = full ? [Math.min(d[0], full[0]), Math.max(d[1], full[1])] : [d[0], d[1]];
+    let [x0, x1] = this.zoom || full || [0, 1];
+    if (x1 <= x0) { const d = Math.abs(x0) * 0.05 || 1e-9; x0 -= d; x1 += d; }
+    let y0 = Infinity, y1 = -Infinity;
+    for (const s of this.series) {
+      if (!s.visible) continue;
+      const a = Math.max(0, lowerBound(s.xs, x0) - 1), b = Math.min(s.xs.length, lowerBound(s.xs, x1) + 1);
+      for (let i = a; i < b; i++) {
+        const v = s.ys[i];
+        if (Number.isFinite(v)) { if (v < y0) y0 = v; if (v > y1) y1 = v; }
+      }
+    }
+    const hasData = y0 <= y1;
+    for (const r of this.refLines) { if (Number.isFinite(r.y)) { y0 = Math.min(y0, r.y); y1 = Math.max(y1, r.y); } }
+    if (this.o.yZero || !(y0 <= y1)) { y0 = Math.min(y0, 0); y1 = Math.max(y1, 0); }
+    if (!(y0 <= y1)) { y0 = 0; y1 = 1; }
+    if (y1 - y0 < 1e-300 || (y1 - y0) < Math.abs(y1) * 1e-9) { const d = Math.abs(y1) * 0.1 || 1; y0 -= d; y1 += d; }
+    const pad = (y1 - y0) * 0.05;
+    y0 = y0 === 0 ? 0 : y0 - pad;
+    y1 += pad;
+    const pw = width - this.M.left - this.M.right, ph = height - this.M.top - this.M.bottom;
+    const sx = (x) => this.M.left + ((x - x0) / (x1 - x0)) * pw;
+    const sy = (y) => this.M.top + (1 - (y - y0) / (y1 - y0)) * ph;
+    const ix = (px) => x0 + ((px - this.M.left) / pw) * (x1 - x0);
+    return { width, height, x0, x1, y0, y1, pw, ph, sx, sy, ix, hasData };
+  }
+
+  // ---- drawing --------------------------------------------------------------------------
+
+  render() {
+    if (this.legendDirty) this.renderLegend();
+    const L = (this.L = this.layout());
+    this.lastWidth = this.svgHost.clientWidth;
+    const { width, height, x0, x1, y0, y1, pw, ph, sx, sy } = L;
+    const xf = this.o.xUnit.factor;
+    const yp = this.o.yPrefix ? siPrefix(Math.max(Math.abs(y0), Math.abs(y1))) : { factor: 1, prefix: '' };
+    this.yp = yp;
+    const parts = [];
+    parts.push(`<svg xmlns="http://www.w3.org/2000/svg" width="${width}" height="${height}" viewBox="0 0 ${width} ${height}" aria-hidden="true" focusable="false">`);
+    parts.push(`<defs><clipPath id="${this.id}-clip"><rect x="${this.M.left}" y="${this.M.top}" width="${pw}" height="${ph}"/></clipPath></defs>`);
+    // grid and ticks
+    const xt = niceTicks(x0 / xf, x1 / xf, Math.max(2, Math.floor(pw / 80)));
+    const yt = niceTicks(y0 / yp.factor, y1 / yp.factor, Math.max(2, Math.floor(ph / 45)));
+    parts.push('<g class="grid">');
+    for (const t of xt) { const x = sx(t * xf).toFixed(1); parts.push(`<line x1="${x}" x2="${x}" y1="${this.M.top}" y2="${this.M.top + ph}"/>`); }
+    for (const t of yt) { const y = sy(t * yp.factor).toFixed(1); parts.push(`<line x1="${this.M.left}" x2="${this.M.left + pw}" y1="${y}" y2="${y}"/>`); }
+    parts.push('</g><g class="axis">');
+    parts.push(`<rect class="frame" x="${this.M.left}" y="${this.M.top}" width="${pw}" height="${ph}"/>`);
+    for (const t of xt) parts.push(`<text x="${sx(t * xf).toFixed(1)}" y="${this.M.top + ph + 14}" text-anchor="middle">${esc(num(t, 4))}</text>`);
+    for (const t of yt) parts.push(`<text x="${this.M.left - 5}" y="${(sy(t * yp.factor) + 4).toFixed(1)}" text-anchor="end">${esc(num(t, 4))}</text>`);
+    const xl = `${this.o.xLabel} (${this.o.xUnit.unit})`;
+    const yl = `${this.o.yLabel || ''}${this.o.yUnit || yp.prefix ? ` (${yp.prefix}${this.o.yUnit})` : ''}`;
+    parts.push(`<text class="label" x="${this.M.left + pw / 2}" y="${height - 4}" text-anchor="middle">${esc(xl)}</text>`);
+    parts.push(`<text class="label" transform="translate(13 ${this.M.top + ph / 2}) rotate(-90)" text-anchor="middle">${esc(yl)}</text>`);
+    parts.push('</g>');
+    // reference lines, labels pushed apart so close values stay readable
+    if (this.refLines.length) {
+      parts.push(`<g class="ref" clip-path="url(#${this.id}-clip)">`);
+      const labels = [];
+      for (const r of this.refLines) {
+        if (!Number.isFinite(r.y)) continue;
+        const y = sy(r.y);
+        parts.push(`<line x1="${this.M.left}" x2="${this.M.left + pw}" y1="${y.toFixed(1)}" y2="${y.toFixed(1)}"${r.color ? ` style="stroke:${r.color}"` : ''}/>`);
+        labels.push({ y, text: `${r.label} ${num(r.y, 4)}` });
+      }
+      parts.push('</g><g class="ref-label">');
+      labels.sort((a, b) => a.y - b.y);
+      for (let i = 1; i < labels.length; i++) labels[i].y = Math.max(labels[i].y, labels[i - 1].y + 11);
+      for (const l of labels) {
+        parts.push(this.labelsInside
+          ? `<text x="${this.M.left + pw - 3}" y="${(l.y - 2.5).toFixed(1)}" text-anchor="end">${esc(l.text)}</text>`
+          : `<text x="${this.M.left + pw + 4}" y="${(l.y + 3.5).toFixed(1)}">${esc(l.text)}</text>`);
+      }
+      parts.push('</g>');
+    }
+    // series
+    parts.push(`<g class="series" clip-path="url(#${this.id}-clip)">`);
+    for (const s of this.series) {
+      if (!s.visible || !s.xs.length) continue;
+      const d = this.pathFor(s, L);
+      if (d) parts.push(`<path d="${d}" stroke="${s.color}"${s.dash ? ` stroke-dasharray="${s.dash}"` : ''}/>`);
+      if (s.xs.length === 1 && Number.isFinite(s.ys[0])) parts.push(`<circle cx="${sx(s.xs[0]).toFixed(1)}" cy="${sy(s.ys[0]).toFixed(1)}" r="2.5" fill="${s.color}"/>`);
+    }
+    parts.push('</g>');
+    if (!L.hasData) parts.push(`<text class="empty" x="${this.M.left + pw / 2}" y="${this.M.top + ph / 2}" text-anchor="middle">${esc(this.o.empty)}</text>`);
+    parts.push('<g class="hover"></g><rect class="sel" x="0" y="0" width="0" height="0" visibility="hidden"/>');
+    parts.push('</svg>');
+    this.svgHost.innerHTML = parts.join('');
+    this.svg = this.svgHost.firstChild;
+    this.reset.hidden = !this.zoom;
+    this.renderHover();
+  }
+
+  pathFor(s, L) {
+    const { x0, x1, sx, sy, pw } = L;
+    const a = Math.max(0, lowerBound(s.xs, x0) - 1), b = Math.min(s.xs.length, lowerBound(s.xs, x1) + 1);
+    const out = [];
+    let pen = false;
+    const emit = (x, y) => {
+      if (!Number.isFinite(y)) { pen = false; return; }
+      out.push(`${pen ? 'L' : 'M'}${sx(x).toFixed(1)} ${sy(y).toFixed(1)}`);
+      pen = true;
+    };
+    if (b - a <= 2 * pw) {
+      for (let i = a; i < b; i++) emit(s.xs[i], s.ys[i]);
+    } else {
+      // per pixel column: first, min, max, last (keeps spikes visible)
+      let col = null, first, last, mn, mx, mnI, mxI;
+      const flush = () => {
+        if (col === null) return;
+        const pts = [[first, 0], [mnI, 1], [mxI, 1], [last, 2]].map(([i]) => i);
+        const uniq = [...new Set(pts)].sort((p, q) => p - q);
+        for (const i of uniq) emit(s.xs[i], s.ys[i]);
+      };
+      for (let i = a; i < b; i++) {
+        const c = Math.floor(sx(s.xs[i]));
+        const y = s.ys[i];
+        if (!Number.isFinite(y)) { flush(); col = null; emit(s.xs[i], y); continue; }
+        if (c !== col) { flush(); col = c; first = last = mnI = mxI = i; mn = mx = y; continue; }
+        last = i;
+        if (y < mn) { mn = y; mnI = i; }
+        if (y > mx) { mx = y; mxI = i; }
+      }
+      flush();
+    }
+    return out.join('');
+  }
+
+  renderLegend() {
+    this.legendDirty = false;
+    this.legend.replaceChildren();
+    for (const s of this.series) {
+      const swatch = h('span', { class: 'swatch', 'aria-hidden': 'true' });
+      swatch.innerHTML = `<svg width="22" height="10"><line x1="1" x2="21" y1="5" y2="5" stroke="${s.color}" stroke-width="2.5"${s.dash ? ` stroke-dasharray="${s.dash}"` : ''}/></svg>`;
+      const b = h('button', {
+        type: 'button', class: 'legend-item', 'aria-pressed': String(s.visible),
+        title: 'Show or hide this series',
+        onclick: () => {
+          s.visible = !s.visible;
+          b.setAttribute('aria-pressed', String(s.visible));
+          this.update();
+        },
+      }, swatch, s.name);
+      this.legend.append(b);
+    }
+  }
+
+  renderHover() {
+    const g = this.svg && this.svg.querySelector('.hover');
+    if (!g) return;
+    const L = this.L;
+    if (this.cursorX === null || !L || !L.hasData) { g.innerHTML = ''; this.tip.hidden = true; return; }
+    const x = this.cursorX;
+    const xf = this.o.xUnit.factor;
+    const rows = [];
+    const marks = [];
+    let px = L.sx(x);
+    for (const s of this.series) {
+      if (!s.visible || !s.xs.length) continue;
+      const i = nearest(s.xs, x);
+      if (i < 0) continue;
+      const y = s.ys[i];
+      rows.push({ s, y, t: s.xs[i] });
+      if (Number.isFinite(y)) marks.push(`<circle cx="${L.sx(s.xs[i]).toFixed(1)}" cy="${L.sy(y).toFixed(1)}" r="3.5" fill="${s.color}" stroke="#fff"/>`);
+    }
+    px = Math.min(Math.max(px, this.M.left), this.M.left + L.pw);
+    g.innerHTML = `<line x1="${px.toFixed(1)}" x2="${px.toFixed(1)}" y1="${this.M.top}" y2="${this.M.top + L.ph}"/>${marks.join('')}`;
+    const unit = `${this.yp.prefix}${this.o.yUnit}`;
+    this.tip.replaceChildren(
+      h('div', { class: 'tip-x' }, `${this.o.xLabel} = ${num(x / xf, 5)} ${this.o.xUnit.unit}`),
+      ...rows.map(({ s, y }) => h('div', {},
+        h('span', { class: 'tip-swatch', style: `background:${s.color}` }),
+        `${s.name}: `, h('b', {}, `${num(y / this.yp.factor, 4)}${unit ? ` ${unit}` : ''}`))),
+    );
+    this.tip.hidden = false;
+    const left = px + 12;
+    const w = this.tip.offsetWidth;
+    this.tip.style.left = `${left + w > L.width ? Math.max(0, px - 12 - w) : left}px`;
+    this.tip.style.top = `${this.M.top}px`;
+  }
+
+  // ---- interaction ----------------------------------------------------------------------
+
+  eventX(ev) {
+    const r = this.svgHost.getBoundingClientRect();
+    return ev.clientX - r.left;
+  }
+
+  bindEvents() {
+    const host = this.svgHost;
+    let drag = null;
+    host.addEventListener('pointerdown', (ev) => {
+      if (ev.button !== 0 || !this.L) return;
+      drag = { px: this.eventX(ev), id: ev.pointerId };
+      host.setPointerCapture(ev.pointerId);
+    });
+    host.addEventListener('pointermove', (ev) => {
+      if (!this.L) return;
+      const px = this.eventX(ev);
+      this.cursorX = this.L.ix(Math.min(Math.max(px, this.M.left), this.M.left + this.L.pw));
+      if (drag && Math.abs(px - drag.px) > 3) {
+        const sel = this.svg.querySelector('.sel');
+        const a = Math.max(this.M.left, Math.min(drag.px, px)), b = Math.min(this.M.left + this.L.pw, Math.max(drag.px, px));
+        sel.setAttribute('x', a); sel.setAttribute('width', Math.max(0, b - a));
+        sel.setAttribute('y', this.M.top); sel.setAttribute('height', this.L.ph);
+        sel.setAttribute('visibility', 'visible');
+      }
+      this.renderHover();
+    });
+    const end = (ev) => {
+      if (!drag) return;
+      const px = this.eventX(ev);
+      const d = drag;
+      drag = null;
+      if (host.hasPointerCapture(d.id)) host.releasePointerCapture(d.id);
+      if (Math.abs(px - d.px) > 5 && this.L) {
+        const a = this.L.ix(Math.max(this.M.left, Math.min(d.px, px))), b = this.L.ix(Math.min(this.M.left + this.L.pw, Math.max(d.px, px)));
+        if (b > a) this.zoom = [a, b];
+      }
+      this.update();
+    };
+    host.addEventListener('pointerup', end);
+    host.addEventListener('pointercancel', () => { drag = null; this.update(); });
+    host.addEventListener('pointerleave', (ev) => {
+      if (drag) return;
+      if (ev.pointerType === 'mouse') { this.cursorX = null; this.renderHover(); }
+    });
+    host.addEventListener('dblclick', () => this.resetZoom());
+    host.addEventListener('blur', () => { this.cursorX = null; this.renderHover(); });
+    host.addEventListener('keydown', (ev) => this.onKey(ev));
+  }
+
+  onKey(ev) {
+    const L = this.L;
+    if (!L) return;
+    const ref = this.series.find((s) => s.visible && s.xs.length);
+    const span = L.x1 - L.x0;
+    let handled = true;
+    if (ev.key === 'ArrowLeft' || ev.key === 'ArrowRight') {
+      if (ref) {
+        const dir = ev.key === 'ArrowLeft' ? -1 : 1;
+        let i = this.cursorX === null ? (dir > 0 ? lowerBound(ref.xs, L.x0) : lowerBound(ref.xs, L.x1) - 1) : nearest(ref.xs, this.cursorX) + dir * (ev.shiftKey ? 10 : 1);
+        i = Math.max(0, Math.min(ref.xs.length - 1, i));
+        this.cursorX = ref.xs[i];
+      }
+    } else if (ev.key === '+' || ev.key === '=') {
+      const c = this.cursorX ?? (L.x0 + L.x1) / 2;
+      this.zoom = [c - span / 4, c + span / 4];
+    } else if (ev.key === '-' || ev.key === '_') {
+      const full = this.dataXRange();
+      const c = this.cursorX ?? (L.x0 + L.x1) / 2;
+      const z = [c - span, c + span];
+      this.zoom = full && z[0] <= full[0] && z[1] >= full[1] ? null : z;
+    } else if (ev.key === 'Escape' || ev.key === '0' || ev.key === 'Home') {
+      this.zoom = null;
+      this.cursorX = null;
+    } else handled = false;
+    if (handled) { ev.preventDefault(); this.update(); }
+  }
+}

@@ -1,0 +1,464 @@
+// One run: live while running (Server-Sent Events), complete after. Plots of the crack-tip
+// speed (with wave-speed reference lines), position/length, J, K and the energy balance;
+// field snapshots with a time slider; summary, scene, downloads, cancel/delete.
+
+import * as api from '../api.js';
+import { Plot, PALETTE, DASHES } from '../plot.js';
+import { sceneWaveSpeeds, speedRefLines } from '../waves.js';
+import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson, orderScene } from '../util.js';
+import { wallTime, labelChips } from './runs.js';
+
+const TERMINAL = new Set(['completed', 'failed', 'cancelled']);
+const COMPONENT_ORDER = ['fringe', 'sxx', 'syy', 'sxy', 'von_mises', 'speed', 'vx', 'vy', 'ux', 'uy', 'exx', 'eyy', 'exy', 'material'];
+const KIND_COMPONENTS = {
+  stress: ['sxx', 'syy', 'sxy'], strain: ['exx', 'eyy', 'exy'], velocity: ['vx', 'vy', 'speed'],
+  displacement: ['ux', 'uy'], fringe: ['fringe'], material: ['material'],
+};
+const COMPONENT_NAMES = {
+  fringe: 'Isochromatic fringes', sxx: 'σxx', syy: 'σyy', sxy: 'σxy', speed: 'Velocity magnitude', vx: 'vx', vy: 'vy',
+  ux: 'ux', uy: 'uy', exx: 'εxx', eyy: 'εyy', exy: 'εxy', material: 'Material', von_mises: 'von Mises stress', umag: 'Displacement magnitude',
+};
+
+/** Rows from an SSE payload or API answer: an array, one row, or {rows|items|data: [...]}. */
+export function rowsOf(d) {
+  if (!d) return [];
+  if (Array.isArray(d)) return d;
+  if (Array.isArray(d.rows)) return d.rows;
+  if (Array.isArray(d.items)) return d.items;
+  if (Array.isArray(d.data)) return d.data;
+  return typeof d === 'object' && 'time' in d ? [d] : [];
+}
+
+/** Components a snapshot offers (its `fields` may list kinds or components). */
+export function snapshotComponents(snap) {
+  const out = new Set();
+  if (snap && Array.isArray(snap.components) && snap.components.length) for (const c of snap.components) out.add(c);
+  else for (const f of (snap && snap.fields) || []) for (const c of KIND_COMPONENTS[f] || [f]) out.add(c);
+  return [...out].sort((a, b) => (COMPONENT_ORDER.indexOf(a) + 99) % 99 - (COMPONENT_ORDER.indexOf(b) + 99) % 99 || a.localeCompare(b));
+}
+
+/** Series name of a crack tip. */
+export function tipName(row, multiCrack) {
+  const end = Number(row.tip) === 0 ? 'start tip' : 'end tip';
+  return multiCrack ? `crack ${row.crack} ${end}` : end;
+}
+
+export function runView(main, { id }) {
+  let alive = true;
+  let job = null;
+  let closeEvents = null;
+  let pollTimer = 0;
+  let playTimer = 0;
+  const plots = [];
+  const lastTip = new Map(); // "crack/tip" → last time plotted
+  let lastEnergy = -Infinity;
+  const tipKeys = [];
+  let snapshots = [];
+  let multiCrack = false;
+  let speeds = null;
+  let maxSpeed = 0;
+
+  const titleEl = h('h1', {}, 'Run');
+  const badgeHost = h('span', { class: 'badge-host' });
+  const actions = h('div', { class: 'actions' });
+  const progressHost = h('div', { class: 'run-progress' });
+  const metaHost = h('dl', { class: 'meta' });
+  const plotGrid = h('div', { class: 'plot-grid' });
+  const snapHost = h('section', { class: 'card', 'aria-labelledby': 'snap-h' });
+  const summaryHost = h('section', { class: 'card', 'aria-labelledby': 'sum-h' });
+  const sceneHost = h('section', { class: 'card', 'aria-labelledby': 'scene-h' });
+  const downloads = h('section', { class: 'card', 'aria-labelledby': 'dl-h' });
+  const messageHost = h('div');
+
+  replace(main,
+    h('p', { class: 'crumbs' }, h('a', { href: '#/runs' }, '← Runs')),
+    h('div', { class: 'page-head' }, h('div', { class: 'title-row' }, titleEl, badgeHost), actions),
+    messageHost, progressHost, metaHost,
+    h('section', { 'aria-labelledby': 'plots-h' }, h('h2', { id: 'plots-h' }, 'Histories'), plotGrid),
+    snapHost, summaryHost, downloads, sceneHost);
+
+  // ---- plots ----------------------------------------------------------------------------
+  const tu0 = { factor: 1e-6, unit: 'µs' };
+  const speedPlot = new Plot(plotGrid, { id: 'plot-speed', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true, xUnit: tu0, empty: 'No crack-tip data yet' });
+  const posPlot = new Plot(plotGrid, { id: 'plot-position', title: 'Crack-tip position and crack length', yLabel: 'position, length', yUnit: 'm', xUnit: tu0, empty: 'No crack-tip data yet' });
+  const jPlot = new Plot(plotGrid, { id: 'plot-j', title: 'J-integral (tip frame)', yLabel: 'J', yUnit: 'J/m²', xUnit: tu0, empty: 'No crack-tip data yet' });
+  const kPlot = new Plot(plotGrid, { id: 'plot-k', title: 'Stress intensity factors', yLabel: 'K', yUnit: 'Pa·√m', xUnit: tu0, empty: 'No crack-tip data yet' });
+  const ePlot = new Plot(plotGrid, { id: 'plot-energy', title: 'Energy balance', yLabel: 'energy', yUnit: 'J', xUnit: tu0, empty: 'No energy data yet' });
+  plots.push(speedPlot, posPlot, jPlot, kPlot, ePlot);
+  const energyCols = [['kinetic', 'kinetic'], ['strain', 'strain'], ['external_work', 'external work'], ['dissipated', 'dissipated'], ['total_error', 'error (balance)']];
+  energyCols.forEach(([k, name], i) => ePlot.ensure(k, { name, color: PALETTE[i], dash: k === 'total_error' ? DASHES[1] : '' }));
+
+  function addTipRows(rows) {
+    let changed = false;
+    for (const r of rows) {
+      if (!r || !Number.isFinite(Number(r.time))) continue;
+      const key = `${r.crack}/${r.tip}`;
+      const t = Number(r.time);
+      if (lastTip.has(key) && t <= lastTip.get(key)) continue;
+      if (!lastTip.has(key)) tipKeys.push(key);
+      lastTip.set(key, t);
+      if (Number(r.crack) > 0) multiCrack = true;
+      const color = PALETTE[tipKeys.indexOf(key) % PALETTE.length];
+      const n = tipName(r, multiCrack);
+      speedPlot.push(key, t, r.speed, { name: `speed, ${n}`, color });
+      posPlot.push(`${key}x`, t, r.x, { name: `x, ${n}`, color });
+      posPlot.push(`${key}y`, t, r.y, { name: `y, ${n}`, color, dash: DASHES[1] });
+      posPlot.push(`${key}l`, t, r.length, { name: `length, ${n}`, color, dash: DASHES[2] });
+      jPlot.push(`${key}1`, t, r.j1, { name: `J1, ${n}`, color });
+      jPlot.push(`${key}2`, t, r.j2, { name: `J2, ${n}`, color, dash: DASHES[1] });
+      kPlot.push(`${key}1`, t, r.k1, { name: `K_I, ${n}`, color });
+      kPlot.push(`${key}2`, t, r.k2, { name: `K_II, ${n}`, color, dash: DASHES[1] });
+      if (Number.isFinite(r.speed)) maxSpeed = Math.max(maxSpeed, Math.abs(r.speed));
+      changed = true;
+    }
+    return changed;
+  }
+
+  function addEnergyRows(rows) {
+    for (const r of rows) {
+      const t = Number(r && r.time);
+      if (!Number.isFinite(t) || t <= lastEnergy) continue;
+      lastEnergy = t;
+      for (const [k] of energyCols) ePlot.push(k, t, r[k]);
+    }
+  }
+
+  async function fillHistories() {
+    const since = (m) => (m.size ? Math.min(...m.values()) : undefined);
+    const [tips, energy] = await Promise.all([
+      api.history(id, 'crack-tips', since(lastTip)).catch(softFail),
+      api.history(id, 'energy', Number.isFinite(lastEnergy) ? lastEnergy : undefined).catch(softFail),
+    ]);
+    if (!alive) return;
+    if (addTipRows(rowsOf(tips))) renderSummary();
+    addEnergyRows(rowsOf(energy));
+  }
+
+  function softFail(e) {
+    if (e instanceof api.ApiError && e.status === 404) return [];
+    throw e;
+  }
+
+  // ---- header, progress, actions --------------------------------------------------------
+  function renderHeader() {
+    titleEl.textContent = job.name || job.id;
+    document.title = `${job.name || job.id} · mpm-fracture`;
+    replace(badgeHost, statusBadge(job.status));
+    const running = job.status === 'running' || job.status === 'queued';
+    replace(actions,
+      running ? h('button', { type: 'button', class: 'danger', id: 'cancel-run', onclick: onCancel }, 'Cancel run') : null,
+      TERMINAL.has(job.status) ? h('button', { type: 'button', class: 'danger secondary', id: 'delete-run', onclick: onDelete }, 'Delete run') : null,
+      h('a', { class: 'button secondary', href: `#/compare?ids=${encodeURIComponent(id)}` }, 'Compare…'));
+    replace(messageHost, job.message && job.status !== 'completed' ? h('p', { class: job.status === 'failed' ? 'error' : 'notice' }, job.message) : null);
+    renderProgress();
+    replace(metaHost,
+      meta('Id', h('span', { class: 'mono' }, job.id)),
+      meta('Labels', labelChips(job.labels)),
+      meta('Created', timeEl(job.created_at)),
+      meta('Started', timeEl(job.started_at)),
+      meta('Finished', timeEl(job.finished_at)),
+      meta('Wall time', duration(wallTime(job))),
+      meta('Attempts', String(job.attempts ?? '–')),
+      speeds ? meta('Wave speeds', h('span', {}, `${speeds.name} (${speeds.analysis.replace('_', ' ')}): c_L ${num(speeds.speeds.cL, 4)}, c_S ${num(speeds.speeds.cS, 4)}, c_R ${num(speeds.speeds.cR, 4)}, √2·c_S ${num(speeds.speeds.sqrt2cS, 4)} m/s`)) : null);
+  }
+
+  function renderProgress() {
+    const p = job.progress;
+    if (job.status !== 'running' && job.status !== 'queued') { progressHost.replaceChildren(); return; }
+    const f = p && Number.isFinite(p.fraction) ? Math.max(0, Math.min(1, p.fraction)) : 0;
+    replace(progressHost,
+      h('progress', { max: 1000, value: Math.round(f * 1000), 'aria-label': 'Run progress' }),
+      h('span', { class: 'muted' }, job.status === 'queued' ? 'queued, waiting for a worker' :
+        `${(f * 100).toFixed(1)} % · step ${p ? count(p.step) : '–'} · t = ${p ? si(p.sim_time, 's') : '–'} of ${p ? si(p.end_time, 's') : '–'}`));
+  }
+
+  function meta(k, v) {
+    return [h('dt', {}, k), h('dd', {}, v)];
+  }
+
+  async function onCancel(ev) {
+    ev.target.disabled = true;
+    try {
+      await api.cancelJob(id);
+      notify('Cancellation requested.');
+      await refreshJob();
+    } catch (e) {
+      notify(`Cancel failed: ${e.message}${e.status === 401 ? ' (set the API token at the top)' : ''}`, 'error');
+      ev.target.disabled = false;
+    }
+  }
+
+  async function onDelete(ev) {
+    if (!window.confirm(`Delete run "${job.name || id}" and all its results?`)) return;
+    ev.target.disabled = true;
+    try {
+      await api.deleteJob(id);
+      notify('Run deleted.');
+      location.hash = '#/runs';
+    } catch (e) {
+      notify(`Delete failed: ${e.message}${e.status === 401 ? ' (set the API token at the top)' : ''}`, 'error');
+      ev.target.disabled = false;
+    }
+  }
+
+  // ---- summary, scene, downloads --------------------------------------------------------
+  function renderSummary() {
+    const s = job && job.summary;
+    const rows = [];
+    if (s) {
+      rows.push(
+        meta('Outcome', h('span', {}, statusBadge(s.status), s.message ? ` ${s.message}` : '')),
+        meta('Steps', count(s.steps)),
+        meta('Time step', si(s.time_step, 's')),
+        meta('Simulated time', si(s.sim_time, 's')),
+        meta('Particles', count(s.particles)),
+        meta('Grid nodes', `${count(s.grid_nodes)} (active on average ${count(s.active_nodes_mean)})`),
+        meta('Wall time', duration(s.wall_seconds)),
+        meta('Throughput', `${count(s.particle_steps_per_second)} particle-steps/s on ${s.threads} thread${s.threads === 1 ? '' : 's'}`),
+        meta('Solver', s.solver_version || '–'),
+        meta('Scene hash', h('span', { class: 'mono break' }, s.scene_hash || '–')));
+    }
+    if (maxSpeed > 0) {
+      const sp = speeds && speeds.speeds;
+      rows.push(meta('Peak tip speed', `${num(maxSpeed, 4)} m/s${sp ? ` = ${num(maxSpeed / sp.cS, 3)} c_S = ${num(maxSpeed / sp.cR, 3)} c_R` : ''}`));
+    }
+    replace(summaryHost, h('h2', { id: 'sum-h' }, 'Summary'),
+      rows.length ? h('dl', { class: 'meta' }, rows) : h('p', { class: 'muted' }, 'The summary appears when the run ends.'));
+  }
+
+  function renderScene() {
+    const text = prettyJson(job.scene ? orderScene(job.scene) : null);
+    replace(sceneHost, h('h2', { id: 'scene-h' }, 'Scene'),
+      job.scene && job.scene.description ? h('p', {}, job.scene.description) : null,
+      h('details', {}, h('summary', {}, 'Scene JSON'), h('pre', { class: 'json', tabindex: 0 }, text)),
+      h('p', {}, h('a', { href: `#/submit?from=${encodeURIComponent(id)}` }, 'Edit a copy as a new run')));
+  }
+
+  function renderDownloads() {
+    const csv = (kind, file) => h('button', {
+      type: 'button', class: 'secondary', onclick: async () => {
+        try { saveBlob(await api.historyCsv(id, kind), `${job.name || id}-${file}`); } catch (e) { notify(`Download failed: ${e.message}`, 'error'); }
+      },
+    }, file);
+    const json = (obj, file) => h('button', {
+      type: 'button', class: 'secondary', disabled: !obj,
+      onclick: () => saveBlob(new Blob([JSON.stringify(obj, null, 2)], { type: 'application/json' }), `${job.name || id}-${file}`),
+    }, file);
+    replace(downloads, h('h2', { id: 'dl-h' }, 'Downloads'),
+      h('div', { class: 'row wrap' },
+        csv('crack-tips', 'crack_tips.csv'), csv('energy', 'energy.csv'),
+        h('a', { class: 'button secondary', href: api.mcapUrl(id), download: `${job.name || id}-fields.mcap` }, 'fields.mcap'),
+        json(job.scene, 'scene.json'), json(job.summary, 'summary.json')),
+      h('p', { class: 'muted small-text' }, 'fields.mcap opens in Foxglove; while the run is going it holds what has been written so far.'));
+  }
+
+  // ---- snapshots ------------------------------------------------------------------------
+  const compSel = h('select', { id: 'snap-component' });
+  const slider = h('input', { id: 'snap-slider', type: 'range', min: 0, max: 0, step: 1, value: 0 });
+  const timeOut = h('output', { for: 'snap-slider', class: 'mono' }, '–');
+  const playBtn = h('button', { type: 'button', id: 'snap-play', 'aria-pressed': 'false' }, '▶ Play');
+  const img = h('img', { id: 'snap-image', class: 'snap-image', alt: '', hidden: true });
+  const snapEmpty = h('p', { class: 'muted' }, 'No field snapshots yet.');
+  let following = true; // slider follows the newest snapshot while live
+  replace(snapHost, h('h2', { id: 'snap-h' }, 'Field snapshots'),
+    h('div', { class: 'snap-controls' },
+      h('div', { class: 'field' }, h('label', { for: 'snap-component' }, 'Field'), compSel),
+      h('div', { class: 'field grow' }, h('label', { for: 'snap-slider' }, 'Time ', timeOut), slider),
+      playBtn),
+    h('figure', { class: 'snap' }, img, snapEmpty));
+  compSel.addEventListener('change', showSnapshot);
+  slider.addEventListener('input', () => { following = Number(slider.value) === snapshots.length - 1; stop(); showSnapshot(); });
+  playBtn.addEventListener('click', () => (playTimer ? stop() : play()));
+
+  function addSnapshots(list) {
+    let added = false;
+    for (const s of list) {
+      if (!s || s.index === undefined || snapshots.some((x) => x.index === s.index)) continue;
+      snapshots.push(s);
+      added = true;
+    }
+    if (!added) return;
+    snapshots.sort((a, b) => a.index - b.index);
+    const comps = new Set();
+    for (const s of snapshots) for (const c of snapshotComponents(s)) comps.add(c);
+    const cur = compSel.value;
+    const ordered = [...comps].sort((a, b) => ((COMPONENT_ORDER.indexOf(a) + 99) % 99) - ((COMPONENT_ORDER.indexOf(b) + 99) % 99));
+    if (compSel.options.length !== ordered.length) {
+      replace(compSel, ordered.map((c) => h('option', { value: c }, COMPONENT_NAMES[c] || c)));
+      compSel.value = ordered.includes(cur) ? cur : ordered[0];
+    }
+    slider.max = String(snapshots.length - 1);
+    if (following) slider.value = String(snapshots.length - 1);
+    showSnapshot();
+  }
+
+  function showSnapshot() {
+    if (!snapshots.length) return;
+    const s = snapshots[Math.min(Number(slider.value), snapshots.length - 1)];
+    let comp = compSel.value;
+    if (!snapshotComponents(s).includes(comp)) comp = snapshotComponents(s)[0];
+    if (!comp) return;
+    const url = api.snapshotUrl(id, s.index, comp);
+    timeOut.textContent = `${si(s.time, 's')} (${Number(slider.value) + 1}/${snapshots.length})`;
+    slider.setAttribute('aria-valuetext', `t = ${si(s.time, 's')}, snapshot ${Number(slider.value) + 1} of ${snapshots.length}`);
+    if (img.dataset.src !== url) {
+      img.dataset.src = url;
+      img.src = url;
+    }
+    img.alt = `${COMPONENT_NAMES[comp] || comp} at t = ${si(s.time, 's')}, with its colour scale and the crack path`;
+    img.hidden = false;
+    snapEmpty.hidden = true;
+  }
+
+  function play() {
+    if (snapshots.length < 2) return;
+    if (Number(slider.value) >= snapshots.length - 1) slider.value = '0';
+    playBtn.textContent = '❚❚ Pause';
+    playBtn.setAttribute('aria-pressed', 'true');
+    following = false;
+    const step = () => {
+      const i = Number(slider.value) + 1;
+      if (i >= snapshots.length) { stop(); following = true; return; }
+      // advance once the current image is there, so playback never shows a blank frame
+      const next = new Image();
+      next.onload = next.onerror = () => {
+        if (!playTimer) return;
+        slider.value = String(i);
+        showSnapshot();
+        playTimer = setTimeout(step, 500);
+      };
+      next.src = api.snapshotUrl(id, snapshots[i].index, snapshotComponents(snapshots[i]).includes(compSel.value) ? compSel.value : snapshotComponents(snapshots[i])[0]);
+    };
+    playTimer = setTimeout(step, 300);
+  }
+
+  function stop() {
+    clearTimeout(playTimer);
+    playTimer = 0;
+    playBtn.textContent = '▶ Play';
+    playBtn.setAttribute('aria-pressed', 'false');
+  }
+
+  async function loadSnapshots() {
+    try {
+      const list = await api.listSnapshots(id);
+      if (alive) addSnapshots(rowsOfSnapshots(list));
+    } catch (e) {
+      if (!(e instanceof api.ApiError && e.status === 404)) throw e;
+    }
+  }
+
+  // ---- live updates ---------------------------------------------------------------------
+  function setStatus(status, extra = {}) {
+    if (!status || !job) return;
+    const changed = job.status !== status;
+    Object.assign(job, extra, { status });
+    if (changed) renderHeader();
+    if (TERMINAL.has(status)) finish();
+  }
+
+  let finishing = false;
+  async function finish() {
+    if (finishing) return;
+    finishing = true;
+    if (closeEvents) { closeEvents(); closeEvents = null; }
+    clearInterval(pollTimer);
+    // the final state: summary, the last rows, the last snapshots
+    try {
+      await refreshJob();
+      await Promise.all([fillHistories(), loadSnapshots()]);
+    } catch (e) {
+      if (alive) notify(`Could not load the final results: ${e.message}`, 'error');
+    }
+  }
+
+  async function refreshJob() {
+    const j = await api.getJob(id);
+    if (!alive) return;
+    job = j;
+    renderHeader();
+    renderSummary();
+    renderDownloads();
+    if (TERMINAL.has(job.status) && !finishing) finish();
+  }
+
+  // Events that arrive before the first history load has answered wait here, so that the
+  // loaded rows and the streamed ones join without a gap or a skipped row.
+  let ready = false;
+  const pending = [];
+  const whenReady = (fn) => (d) => { if (ready) fn(d); else pending.push(() => fn(d)); };
+
+  function connect() {
+    let hadError = false;
+    closeEvents = api.subscribe(id, {
+      progress: (d) => {
+        const p = d && d.progress ? d.progress : d;
+        if (!p || typeof p !== 'object' || !job) return;
+        job.progress = p;
+        if (job.status === 'queued') setStatus('running');
+        renderProgress();
+      },
+      crack_tip: whenReady((d) => { if (addTipRows(rowsOf(d))) renderSummary(); }),
+      energy: whenReady((d) => addEnergyRows(rowsOf(d))),
+      snapshot: whenReady((d) => addSnapshots(rowsOfSnapshots(d))),
+      status: (d) => {
+        const st = typeof d === 'string' ? d : d && (d.status || (d.job && d.job.status));
+        setStatus(st, d && typeof d === 'object' && d.message ? { message: d.message } : {});
+      },
+      onopen: () => { if (hadError) { hadError = false; fillHistories().catch(() => {}); } },
+      onerror: () => { hadError = true; },
+    });
+  }
+
+  // ---- start ----------------------------------------------------------------------------
+  (async () => {
+    try {
+      job = await api.getJob(id);
+    } catch (e) {
+      if (!alive) return;
+      replace(main, h('p', { class: 'crumbs' }, h('a', { href: '#/runs' }, '← Runs')),
+        h('h1', {}, 'Run not found'),
+        h('p', { class: 'error' }, e.status === 404 ? `There is no run with id ${id}.` : `Could not load the run: ${e.message}`));
+      return;
+    }
+    if (!alive) return;
+    speeds = sceneWaveSpeeds(job.scene);
+    const end = (job.scene && job.scene.time && job.scene.time.end) || (job.progress && job.progress.end_time) || 1e-4;
+    const tu = timeUnit(end);
+    for (const p of plots) { p.setXUnit(tu); p.setXDomain(0, end); }
+    speedPlot.setRefLines(speedRefLines(speeds && speeds.speeds));
+    renderHeader();
+    renderSummary();
+    renderScene();
+    renderDownloads();
+    if (!TERMINAL.has(job.status)) {
+      connect();
+      // a slow safety net in case the event stream is interrupted: keeps the header right
+      pollTimer = setInterval(() => { if (!finishing) refreshJob().then(() => fillHistories()).catch(() => {}); }, 5000);
+    }
+    try {
+      await Promise.all([fillHistories(), loadSnapshots()]);
+    } catch (e) {
+      if (alive) notify(`Could not load the results: ${e.message}`, 'error');
+    }
+    ready = true;
+    for (const f of pending.splice(0)) f();
+    if (TERMINAL.has(job.status)) finishing = true;
+  })();
+
+  return () => {
+    alive = false;
+    stop();
+    clearInterval(pollTimer);
+    if (closeEvents) closeEvents();
+    for (const p of plots) p.destroy();
+    document.title = 'mpm-fracture';
+  };
+}
+
+function rowsOfSnapshots(d) {
+  if (!d) return [];
+  if (Array.isArray(d)) return d;
+  if (Array.isArray(d.snapshots)) return d.snapshots;
+  return typeof d === 'object' && 'index' in d ? [d] : [];
+}

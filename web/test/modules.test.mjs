@@ -1,0 +1,81 @@
+// Unit tests of the dashboard's pure modules: `node --test web/test/` (no browser, no
+// packages). The browser test in tests/tests/dashboard.rs covers the pages.
+import { test } from 'node:test';
+import assert from 'node:assert/strict';
+import { rayleighSpeed, waveSpeeds, sceneWaveSpeeds } from '../js/waves.js';
+import { locate, splitPath, syntaxErrorPosition } from '../js/jsonlocate.js';
+import { niceTicks } from '../js/plot.js';
+import { prettyJson, siPrefix, num, parseLabels } from '../js/util.js';
+
+test('wave speeds of Homalite-100 match reference-solutions.md', () => {
+  const pe = waveSpeeds(5.2e9, 0.34, 1230, 'plane_strain');
+  const ps = waveSpeeds(5.2e9, 0.34, 1230, 'plane_stress');
+  assert.equal(Math.round(pe.cS), 1256);
+  assert.equal(Math.round(pe.cL), 2551);
+  assert.equal(Math.round(ps.cL), 2186);
+  assert.equal(Math.round(pe.cR), 1172);
+  assert.equal(Math.round(ps.cR), 1156);
+  assert.equal(Math.round(pe.sqrt2cS), 1776);
+});
+
+test('the Rayleigh speed solves the Rayleigh equation exactly', () => {
+  for (const nu of [0.0, 0.2, 0.25, 0.34, 0.45, 0.49]) {
+    const { cL, cS, cR } = waveSpeeds(1e9, nu, 1000);
+    const x = (cR / cS) ** 2, k = (cS / cL) ** 2;
+    assert.ok(Math.abs((2 - x) ** 2 - 4 * Math.sqrt(1 - x) * Math.sqrt(1 - k * x)) < 1e-12, `nu=${nu}`);
+    assert.ok(cR < cS && cR > 0.87 * cS);
+  }
+  // ν = 0.25 (κ = 1/3): x = 2 − 2/√3 (Rayleigh's classical root)
+  const { cS, cL } = waveSpeeds(1e9, 0.25, 1000);
+  assert.ok(Math.abs(rayleighSpeed(cL, cS) / cS - Math.sqrt(2 - 2 / Math.sqrt(3))) < 1e-12);
+});
+
+test('the material is the one the crack lies in', () => {
+  const scene = {
+    materials: { soft: { youngs_modulus: 1e9, poissons_ratio: 0.3, density: 1000 }, stiff: { youngs_modulus: 2e11, poissons_ratio: 0.3, density: 7800 } },
+    bodies: [
+      { material: 'stiff', region: { rectangle: { min: [0, 0], max: [1, 1] } } },
+      { material: 'soft', region: { circle: { center: [3, 3], radius: 1 } } },
+    ],
+    cracks: [{ points: [[3, 3], [3.5, 3]] }],
+  };
+  assert.equal(sceneWaveSpeeds(scene).name, 'soft');
+  assert.equal(sceneWaveSpeeds({ ...scene, cracks: [] }).name, 'stiff');
+  assert.equal(sceneWaveSpeeds({}), null);
+});
+
+test('a validator path is found at its line', () => {
+  const text = prettyJson({ name: 'x', materials: { 'pl.ate': { poissons_ratio: 0.7 } }, bodies: [{ material: 'a' }, { material: 'b', region: { rectangle: { min: [0, 0] } } }] });
+  const lines = text.split('\n');
+  const at = (p) => lines[locate(text, p).line - 1];
+  assert.match(at('materials.pl.ate.poissons_ratio'), /poissons_ratio/);
+  assert.match(at('bodies.1.material'), /"b"/);
+  assert.match(at('bodies[1].region.rectangle.min'), /"min"/);
+  assert.equal(locate(text, 'time.end').found, false);
+  assert.deepEqual(splitPath('a[0].b["c"]'), ['a', '0', 'b', 'c']);
+});
+
+test('JSON syntax errors are placed', () => {
+  const text = '{\n  "a": 1,\n  "b": }\n';
+  let err;
+  try { JSON.parse(text); } catch (e) { err = e; }
+  assert.equal(syntaxErrorPosition(text, err).line, 3);
+});
+
+test('ticks, prefixes, numbers, labels', () => {
+  assert.deepEqual(niceTicks(0, 100, 5), [0, 20, 40, 60, 80, 100]);
+  assert.deepEqual(niceTicks(0.3, 1.1, 4), [0.4, 0.6, 0.8, 1]);
+  assert.deepEqual(siPrefix(2.5e6), { factor: 1e6, prefix: 'M' });
+  assert.deepEqual(siPrefix(3e-5), { factor: 1e-6, prefix: 'µ' });
+  assert.equal(num(1234.5678), '1235');
+  assert.equal(num(1.5e-5), '1.500e-5');
+  assert.deepEqual(parseLabels('a:b, c=d'), { a: 'b', c: 'd' });
+  assert.throws(() => parseLabels('nocolon'));
+});
+
+test('prettyJson round-trips and keeps points on one line', () => {
+  const v = { grid: { min: [0, 0], max: [0.1, 0.1] }, cracks: [{ points: [[0.04, 0.05], [0.06, 0.05]] }], e: [], o: {} };
+  const t = prettyJson(v);
+  assert.deepEqual(JSON.parse(t), v);
+  assert.match(t, /"points": \[\[0.04, 0.05\], \[0.06, 0.05\]\]/);
+});
