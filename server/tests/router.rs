@@ -268,6 +268,10 @@ async fn service_pages_are_served() {
     let (s, api) = call(&st, get("/api/v1/openapi.json")).await;
     assert_eq!(s, StatusCode::OK);
     assert!(api["paths"]["/api/v1/jobs/{id}/snapshots/{index}/{file}"].is_object());
+    assert_eq!(
+        api["components"]["securitySchemes"]["bearer"]["scheme"],
+        "bearer"
+    );
     let resp = app(st.clone()).oneshot(get("/")).await.unwrap();
     assert_eq!(resp.status(), StatusCode::OK);
     let resp = app(st.clone()).oneshot(get("/api/v1/docs/")).await.unwrap();
