@@ -52,6 +52,9 @@ pub struct Particles {
     pub cold: Vec<Cold>,
     /// Position at the end of the step being computed (scratch of the particle update).
     pub x_next: Vec<[f64; 2]>,
+    /// Shape-function weights of the step in progress, computed once in the P2G pass and
+    /// reused by the later passes (which must use the same weights, `algorithm.md` pitfall 2).
+    pub wts: Vec<crate::shape::Weights2>,
     /// Displacement gradient (∂ux/∂x, ∂ux/∂y, ∂uy/∂x, ∂uy/∂y), accumulated as Σ L·Δt; only
     /// the J-integral needs it, so it is empty (never computed) when the scene has no cracks.
     pub grad_u: Vec<[f64; 4]>,
@@ -87,6 +90,8 @@ pub struct PartsMut<'a> {
     pub fmask: &'a mut [u16],
     /// Displacement gradients (empty without cracks).
     pub grad_u: &'a mut [[f64; 4]],
+    /// Weights of the step.
+    pub wts: &'a mut [crate::shape::Weights2],
 }
 
 impl<'a> PartsMut<'a> {
@@ -100,6 +105,7 @@ impl<'a> PartsMut<'a> {
             x_next: &mut p.x_next,
             fmask: &mut p.fmask,
             grad_u: &mut p.grad_u,
+            wts: &mut p.wts,
         }
     }
     /// Number of particles in the view.
@@ -122,6 +128,7 @@ impl<'a> PartsMut<'a> {
         } else {
             self.fmask.split_at_mut(i)
         };
+        let (w0, w1) = self.wts.split_at_mut(i);
         let (g0, g1) = if self.grad_u.is_empty() {
             (&mut [][..], &mut [][..])
         } else {
@@ -136,6 +143,7 @@ impl<'a> PartsMut<'a> {
                 x_next: x0,
                 fmask: f0,
                 grad_u: g0,
+                wts: w0,
             },
             PartsMut {
                 kin: k1,
@@ -145,6 +153,7 @@ impl<'a> PartsMut<'a> {
                 x_next: x1,
                 fmask: f1,
                 grad_u: g1,
+                wts: w1,
             },
         )
     }

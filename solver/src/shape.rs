@@ -63,10 +63,21 @@ pub fn fast_floor(x: f64) -> f64 {
     if r > x { r - 1.0 } else { r }
 }
 
+/// floor(x) as a float and as an integer, for |x| < 2³¹: the low 32 bits of x + 1.5·2⁵²
+/// hold round(x) (a saturating `as i32` cast costs a dozen instructions).
+#[inline(always)]
+fn floor_both(x: f64) -> (f64, i32) {
+    const MAGIC: f64 = 6_755_399_441_055_744.0;
+    let t = x + MAGIC;
+    let r = t - MAGIC;
+    let i = t.to_bits() as u32 as i32;
+    if r > x { (r - 1.0, i - 1) } else { (r, i) }
+}
+
 /// 1D weights at ξ (cell units from the grid origin).
 #[inline(always)]
 pub fn weights_1d(kind: ShapeFunction, xi: f64, l: f64) -> Weights1 {
-    let cell = fast_floor(xi);
+    let (cell, icell) = floor_both(xi);
     let f = xi - cell;
     match kind {
         ShapeFunction::Gimp => {
@@ -76,9 +87,9 @@ pub fn weights_1d(kind: ShapeFunction, xi: f64, l: f64) -> Weights1 {
             // out for that range, and the middle weight follows from Σ S = 1 (equal to the
             // branch formula: see `fast_weights_match_reference`).
             let (base, u) = if f < 0.5 {
-                (cell - 1.0, f)
+                (icell - 1, f)
             } else {
-                (cell, f - 1.0)
+                (icell, f - 1.0)
             };
             let q = 0.25 / l;
             let (sl, dl) = if u <= -l {
@@ -98,13 +109,13 @@ pub fn weights_1d(kind: ShapeFunction, xi: f64, l: f64) -> Weights1 {
                 (0.0, 0.0)
             };
             Weights1 {
-                base: base as i32,
+                base,
                 s: [sl, 1.0 - sl - sr, sr],
                 ds: [dl, -dl - dr, dr],
             }
         }
         ShapeFunction::Linear => Weights1 {
-            base: cell as i32,
+            base: icell,
             s: [1.0 - f, f, 0.0],
             ds: [-1.0, 1.0, 0.0],
         },

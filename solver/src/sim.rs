@@ -305,6 +305,7 @@ impl Simulation {
                 body: s.body,
             });
             parts.x_next.push(s.x);
+            parts.wts.push(Weights2::default());
             id += 1;
         });
         let n = parts.len();
@@ -920,6 +921,7 @@ impl Simulation {
                 let k = p.kin[i];
                 let m = p.mech[i].m;
                 let w = Weights2::new(shape, geom.xi(k.x), p.mech[i].lh);
+                p.wts[i] = w;
                 grow_box(&mut acc, &w);
                 let (mask, disp) = if cracks {
                     let x0 = p.cold[i].x0;
@@ -954,7 +956,6 @@ impl Simulation {
     /// Pass 2: velocity gradient from p/m, first stress half-update, forces to the grid.
     fn pass_forces(&mut self) -> Acc {
         let geom = self.geom;
-        let shape = self.shape;
 
         let half = 0.5 * self.dt;
         let inv_h = 1.0 / geom.h;
@@ -966,9 +967,8 @@ impl Simulation {
             let mut acc = Acc::default();
             let has_mask = !p.fmask.is_empty();
             for i in 0..p.len() {
-                let k = p.kin[i];
                 let mech = p.mech[i];
-                let w = Weights2::new(shape, geom.xi(k.x), mech.lh);
+                let w = p.wts[i];
                 let mask = if has_mask { p.fmask[i] } else { 0 };
                 // L_ij = Σ_nodes v_i ∂S/∂x_j, each node giving its particle's field (pitfall 3).
                 let mut l = [[0.0; 2]; 2];
@@ -1028,7 +1028,6 @@ impl Simulation {
     /// weights and fields.
     fn pass_update(&mut self) -> Acc {
         let geom = self.geom;
-        let shape = self.shape;
 
         let dt = self.dt;
         let h = geom.h;
@@ -1043,7 +1042,7 @@ impl Simulation {
             for i in 0..p.len() {
                 let k = p.kin[i];
                 let mech = p.mech[i];
-                let w = Weights2::new(shape, geom.xi(k.x), mech.lh);
+                let w = p.wts[i];
                 let mask = if has_mask { p.fmask[i] } else { 0 };
                 let mut acc_p = [0.0; 2];
                 let mut vbar = [0.0; 2];
@@ -1080,9 +1079,9 @@ impl Simulation {
                 if mech.load > 0 {
                     let t = loads[mech.load as usize - 1];
                     let edge = 2.0 * mech.lh * h;
-                    acc.w += edge
-                        * (t[0] * 0.5 * (v_old[0] + v[0]) + t[1] * 0.5 * (v_old[1] + v[1]))
-                        * dt;
+                    // Work on the grid: F · v̄ Δt with v̄ the mid-step grid velocity at the
+                    // particle (the velocity that moves it), consistent with the grid's energy.
+                    acc.w += edge * (t[0] * vbar[0] + t[1] * vbar[1]) * dt;
                 }
                 // Re-extrapolate momentum with the same weights and fields (pitfall 2).
                 let mv = [mech.m * v[0], mech.m * v[1]];
@@ -1103,7 +1102,6 @@ impl Simulation {
     /// positions committed, strain energy summed.
     fn pass_strain_last(&mut self) -> Acc {
         let geom = self.geom;
-        let shape = self.shape;
 
         let half = 0.5 * self.dt;
         let inv_h = 1.0 / geom.h;
@@ -1113,9 +1111,8 @@ impl Simulation {
             let mut acc = Acc::default();
             let has_mask = !p.fmask.is_empty();
             for i in 0..p.len() {
-                let k = p.kin[i];
                 let mech = p.mech[i];
-                let w = Weights2::new(shape, geom.xi(k.x), mech.lh);
+                let w = p.wts[i];
                 let mask = if has_mask { p.fmask[i] } else { 0 };
                 let mut l = [[0.0; 2]; 2];
                 visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {

@@ -1,0 +1,226 @@
+//! The example scenes in `scenes/`: every file parses and validates (library and `fracture
+//! validate`), names itself after its file and says what it is; each `-fine` scene halves
+//! its coarse twin's cell size and keeps its crack; the coarse edge crack runs through
+//! `fracture run` and reports K_I near Tada's value. The verification scenes reproduce the
+//! scenes of `solver/tests/` (see `docs/verification.md`).
+#![allow(clippy::unwrap_used, missing_docs)]
+
+use std::path::{Path, PathBuf};
+use std::process::{Command, Output};
+
+use fracture_api::Scene;
+use fracture_api::scene::Region;
+use fracture_api::validate::{RunSize, parse_scene, validate};
+
+/// The scenes reproducing the verification tests (coarse) and their refined twins.
+const VERIFICATION: [&str; 10] = [
+    "center-crack",
+    "edge-crack",
+    "shear-crack",
+    "freund",
+    "edge-crack-growth",
+    "dcb",
+    "vibrating-bar",
+    "wave-bar",
+    "compression-crack",
+    "coulomb-crack",
+];
+const FINE: [&str; 5] = ["center-crack", "edge-crack", "shear-crack", "freund", "dcb"];
+
+fn scenes_dir() -> PathBuf {
+    Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes")
+}
+
+/// Every `scenes/*.json`, sorted.
+fn scene_files() -> Vec<PathBuf> {
+    let mut files: Vec<PathBuf> = std::fs::read_dir(scenes_dir())
+        .unwrap()
+        .map(|e| e.unwrap().path())
+        .filter(|p| p.extension().and_then(|e| e.to_str()) == Some("json"))
+        .collect();
+    files.sort();
+    files
+}
+
+fn load(name: &str) -> (Scene, RunSize) {
+    let path = scenes_dir().join(format!("{name}.json"));
+    let text = std::fs::read_to_string(&path).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let scene = parse_scene(&text).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    let size = validate(&scene).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+    (scene, size)
+}
+
+fn fracture(args: &[&str]) -> Output {
+    Command::new(env!("CARGO_BIN_EXE_fracture"))
+        .args(args)
+        .output()
+        .unwrap()
+}
+
+#[test]
+fn every_scene_parses_validates_and_describes_itself() {
+    let files = scene_files();
+    for path in &files {
+        let stem = path.file_stem().unwrap().to_str().unwrap();
+        let (scene, size) = load(stem);
+        assert_eq!(scene.name, stem, "{}: name", path.display());
+        assert!(
+            scene.description.len() > 80,
+            "{}: the description should state the problem and its reference",
+            path.display()
+        );
+        assert!(size.particles > 0 && size.steps > 0, "{stem}: {size:?}");
+    }
+    for name in VERIFICATION {
+        assert!(
+            scenes_dir().join(format!("{name}.json")).exists(),
+            "scenes/{name}.json is missing"
+        );
+    }
+    for name in FINE {
+        assert!(
+            scenes_dir().join(format!("{name}-fine.json")).exists(),
+            "scenes/{name}-fine.json is missing"
+        );
+    }
+}
+
+/// Length of each crack inside the bodies (rectangular bodies, straight horizontal cracks):
+/// the part of the crack that is material, independent of how far the mouth reaches out.
+fn crack_lengths_inside(s: &Scene) -> Vec<f64> {
+    s.cracks
+        .iter()
+        .map(|c| {
+            let (a, b) = (c.points[0], c.points[c.points.len() - 1]);
+            assert_eq!(a[1], b[1], "{}: expected a horizontal crack", s.name);
+            let (x0, x1) = (a[0].min(b[0]), a[0].max(b[0]));
+            s.bodies
+                .iter()
+                .map(|body| match body.region {
+                    Region::Rectangle { min, max } => (x1.min(max[0]) - x0.max(min[0])).max(0.0),
+                    _ => panic!("{}: expected rectangular bodies", s.name),
+                })
+                .sum()
+        })
+        .collect()
+}
+
+#[test]
+fn fine_scenes_halve_the_cell_and_keep_the_problem() {
+    for name in FINE {
+        let (coarse, cs) = load(name);
+        let (fine, fs) = load(&format!("{name}-fine"));
+        let h = coarse.grid.cell_size;
+        assert!(
+            (fine.grid.cell_size - 0.5 * h).abs() < 1e-12 * h,
+            "{name}: cell {} vs {}",
+            fine.grid.cell_size,
+            h
+        );
+        // Same crack inside the material, same material, loads, damping and times.
+        let (lc, lf) = (crack_lengths_inside(&coarse), crack_lengths_inside(&fine));
+        assert_eq!(lc.len(), lf.len(), "{name}");
+        for (a, b) in lc.iter().zip(&lf) {
+            assert!((a - b).abs() < 1e-9 * a, "{name}: crack length {a} vs {b}");
+        }
+        assert_eq!(coarse.materials, fine.materials, "{name}");
+        assert_eq!(coarse.damping, fine.damping, "{name}");
+        assert_eq!(coarse.time, fine.time, "{name}");
+        assert_eq!(coarse.analysis, fine.analysis, "{name}");
+        let tractions = |s: &Scene| s.loads.iter().map(|l| l.traction).collect::<Vec<_>>();
+        assert_eq!(tractions(&coarse), tractions(&fine), "{name}");
+        for (a, b) in coarse.cracks.iter().zip(&fine.cracks) {
+            assert_eq!(a.contact, b.contact, "{name}");
+            assert_eq!(a.propagation, b.propagation, "{name}");
+            assert_eq!(a.j_contour, b.j_contour, "{name}");
+        }
+        // About four times the particles (the margins and h/2 strips shift a little).
+        let ratio = fs.particles as f64 / cs.particles as f64;
+        assert!(
+            (3.7..4.3).contains(&ratio),
+            "{name}: particle ratio {ratio}"
+        );
+    }
+}
+
+#[test]
+fn fracture_validate_accepts_every_scene() {
+    for path in scene_files() {
+        let o = fracture(&["validate", path.to_str().unwrap()]);
+        let out = String::from_utf8_lossy(&o.stdout);
+        assert_eq!(
+            o.status.code(),
+            Some(0),
+            "{}: {}",
+            path.display(),
+            String::from_utf8_lossy(&o.stderr)
+        );
+        let stem = path.file_stem().unwrap().to_str().unwrap();
+        assert!(out.contains(&format!("{stem}: valid")), "{out}");
+    }
+}
+
+/// Tada's edge-crack factor F(a/b) (`reference-solutions.md`).
+fn tada_edge(ab: f64) -> f64 {
+    let pi = std::f64::consts::PI;
+    let x = pi * ab / 2.0;
+    ((2.0 / (pi * ab)) * x.tan()).sqrt() * (0.752 + 2.02 * ab + 0.37 * (1.0 - x.sin()).powi(3))
+        / x.cos()
+}
+
+/// `fracture run scenes/edge-crack.json` (~15,500 particles, 1,225 steps): exits 0 and its
+/// `crack_tips.csv` has one tip (tip 1: the start of the polyline is the mouth) sampled every
+/// microsecond, with K_I over the last 20 % of the run within 5 % of Tada (the tolerance of
+/// `edge_crack_mode_one`, which averages every step instead of every microsecond).
+#[test]
+fn edge_crack_runs_from_the_command_line() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("edge-crack");
+    let scene = scenes_dir().join("edge-crack.json");
+    let o = fracture(&[
+        "run",
+        scene.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(
+        o.status.code(),
+        Some(0),
+        "{}",
+        String::from_utf8_lossy(&o.stderr)
+    );
+    let csv = std::fs::read_to_string(out.join("crack_tips.csv")).unwrap();
+    let mut lines = csv.lines();
+    assert_eq!(
+        lines.next(),
+        Some("time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing")
+    );
+    let rows: Vec<Vec<f64>> = lines
+        .map(|l| l.split(',').map(|v| v.parse::<f64>().unwrap()).collect())
+        .collect();
+    // t = 0, every 1 µs to 240 µs (and possibly a final sample).
+    assert!(rows.len() >= 240, "{} rows", rows.len());
+    assert!(
+        rows.iter().all(|r| r[1] == 0.0 && r[2] == 1.0),
+        "one tip, tip 1"
+    );
+    let (scene, _) = load("edge-crack");
+    let t_avg = 0.8 * scene.time.end;
+    let late: Vec<f64> = rows
+        .iter()
+        .filter(|r| r[0] >= t_avg)
+        .map(|r| r[9])
+        .collect();
+    let k = late.iter().sum::<f64>() / late.len() as f64;
+    let a = 0.0125;
+    let k_ref = 1.0e6 * (std::f64::consts::PI * a).sqrt() * tada_edge(a / 0.040);
+    let err = (k - k_ref) / k_ref;
+    eprintln!(
+        "edge-crack.json: K_I {k:.0} vs Tada {k_ref:.0} ({:+.2} %)",
+        100.0 * err
+    );
+    assert!(err.abs() < 0.05, "K_I {k} vs {k_ref}");
+    for f in ["summary.json", "energy.csv", "fields.mcap"] {
+        assert!(out.join(f).exists(), "{f} missing");
+    }
+}
