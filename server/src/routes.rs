@@ -58,9 +58,24 @@ impl From<StoreError> for ApiError {
         (name = "service", description = "Health"),
         (name = "worker", description = "Worker protocol (worker token)")
     ),
-    components(schemas(ErrorDoc))
+    components(schemas(ErrorDoc)),
+    modifiers(&BearerAuth)
 )]
 struct ApiDoc;
+
+/// Declares the `bearer` security scheme the token-protected routes name.
+struct BearerAuth;
+
+impl utoipa::Modify for BearerAuth {
+    fn modify(&self, openapi: &mut utoipa::openapi::OpenApi) {
+        use utoipa::openapi::security::{Http, HttpAuthScheme, SecurityScheme};
+        let components = openapi.components.get_or_insert_with(Default::default);
+        components.add_security_scheme(
+            "bearer",
+            SecurityScheme::Http(Http::new(HttpAuthScheme::Bearer)),
+        );
+    }
+}
 
 /// The error body (`{"error","message","details"}`).
 #[derive(utoipa::ToSchema)]

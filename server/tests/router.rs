@@ -268,6 +268,10 @@ async fn service_pages_are_served() {
     let (s, api) = call(&st, get("/api/v1/openapi.json")).await;
     assert_eq!(s, StatusCode::OK);
     assert!(api["paths"]["/api/v1/jobs/{id}/snapshots/{index}/{file}"].is_object());
+    assert_eq!(
+        api["components"]["securitySchemes"]["bearer"]["scheme"],
+        "bearer"
+    );
     let resp = app(st.clone()).oneshot(get("/")).await.unwrap();
     assert_eq!(resp.status(), StatusCode::OK);
     let resp = app(st.clone()).oneshot(get("/api/v1/docs/")).await.unwrap();
@@ -278,4 +282,49 @@ async fn service_pages_are_served() {
     let (s, v) = call(&st, get("/api/v1/scenes")).await;
     assert_eq!(s, StatusCode::OK);
     assert!(v.is_array());
+}
+
+#[tokio::test]
+async fn priorities_order_claims_and_lost_leases_hit_the_attempt_limit() {
+    use std::time::Duration;
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let low = json!({"scene": scene(), "priority": 0});
+    let high = json!({"scene": scene(), "priority": 5, "labels": {"k": "v"}});
+    let (_, a) = call(&st, post("/api/v1/jobs", low.to_string(), None)).await;
+    let (_, b) = call(&st, post("/api/v1/jobs", high.to_string(), None)).await;
+    let first = st.store.claim("w", Duration::ZERO).await.unwrap().unwrap();
+    assert_eq!(
+        first.job.id,
+        b["id"].as_str().unwrap(),
+        "higher priority first"
+    );
+    // Its worker is lost every time: re-queued until the attempt limit, then failed.
+    let max = st.cfg.max_attempts;
+    for attempt in 1..=max {
+        tokio::time::sleep(Duration::from_millis(5)).await;
+        let reaped = st.store.reap(max).await.unwrap();
+        assert_eq!(reaped.len(), 1);
+        let j = &reaped[0];
+        if attempt < max {
+            assert_eq!(j.status, "queued");
+            let again = st.store.claim("w", Duration::ZERO).await.unwrap().unwrap();
+            assert_eq!(again.job.id, j.id);
+            assert_eq!(again.job.fence, attempt as i64 + 1);
+        } else {
+            assert_eq!(j.status, "failed");
+            assert!(
+                j.message.as_deref().unwrap().contains("lost"),
+                "{:?}",
+                j.message
+            );
+        }
+    }
+    let next = st
+        .store
+        .claim("w", Duration::from_secs(30))
+        .await
+        .unwrap()
+        .unwrap();
+    assert_eq!(next.job.id, a["id"].as_str().unwrap());
 }
