@@ -28,6 +28,8 @@ use fracture_api::Scene;
 use fracture_api::results::CrackTipRow;
 use fracture_api::scene::{ContactLaw, GrowthDirection, Propagation, ShapeFunction};
 
+use rayon::prelude::*;
+
 use crate::grid::{GridGeom, Node, STRIP};
 use crate::material::Elastic;
 use crate::particles::{Kin, Mech, Particles};
@@ -108,6 +110,10 @@ impl Crack {
     }
 }
 
+/// A field-1 pair found by the crossing test: storage index of the node, crack, side of the
+/// particle (+1 above, −1 below), normal of the crossed segment.
+type FieldEntry = (u32, u32, i32, [f64; 2]);
+
 /// Field-1 node record: which side field 1 holds, the contact normal, the crack.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SlotInfo {
@@ -132,7 +138,9 @@ pub struct Cracks {
     // Broad phase: segments (crack, segment) registered per cell, CSR.
     cell_start: Vec<u32>,
     cell_segs: Vec<(u32, u32)>,
-    entries: Vec<(u32, u32, i32, [f64; 2])>,
+    entries: Vec<FieldEntry>,
+    /// Per-chunk entries and first error of the parallel mask pass.
+    chunk_entries: Vec<(Vec<FieldEntry>, Option<(usize, u32)>)>,
     /// Normal contact impulse |Δp_n| of the last force-stage contact at each node (dense over
     /// grid storage): the friction capacity of faces that are in contact but not approaching
     /// at the extrapolation stages.
@@ -242,6 +250,7 @@ impl Cracks {
             cell_start: Vec::new(),
             cell_segs: Vec::new(),
             entries: Vec::new(),
+            chunk_entries: Vec::new(),
             normal_impulse: vec![0.0; geom.storage_len()],
             ncx: geom.nx - 1,
             ncy: geom.ny - 1,
@@ -324,21 +333,17 @@ impl Cracks {
         &self.cell_segs[self.cell_start[c] as usize..self.cell_start[c + 1] as usize]
     }
 
-    /// Assign the velocity field of every particle–node pair (§3); fills `f1_index` with the
-    /// sorted storage indices of nodes needing field 1 and `self.slots` with their records.
-    /// Err((node, fields)) when a node would need more than two fields.
-    pub fn assign_fields(
-        &mut self,
+    /// Field masks of the particles `kin`/`mech` into `fmask`, and the field-1 entries
+    /// (node, crack, side vote, crossed-segment normal) in particle order.
+    fn masks(
+        &self,
         geom: &GridGeom,
         shape: ShapeFunction,
         kin: &[Kin],
         mech: &[Mech],
         fmask: &mut [u16],
-        f1_index: &mut Vec<u32>,
+        entries: &mut Vec<FieldEntry>,
     ) -> Result<(), (usize, u32)> {
-        self.build_broad_phase(geom);
-        let mut entries = std::mem::take(&mut self.entries);
-        entries.clear();
         for (i, (k, m)) in kin.iter().zip(mech).enumerate() {
             let segs = self.segs_near(geom, k.x);
             if segs.is_empty() {
@@ -393,6 +398,55 @@ impl Cracks {
                 }
             }
             fmask[i] = mask;
+        }
+        Ok(())
+    }
+
+    /// Assign the velocity field of every particle–node pair (§3); fills `f1_index` with the
+    /// sorted storage indices of nodes needing field 1 and `self.slots` with their records.
+    /// Err((node, fields)) when a node would need more than two fields.
+    pub fn assign_fields(
+        &mut self,
+        geom: &GridGeom,
+        shape: ShapeFunction,
+        kin: &[Kin],
+        mech: &[Mech],
+        fmask: &mut [u16],
+        f1_index: &mut Vec<u32>,
+    ) -> Result<(), (usize, u32)> {
+        self.build_broad_phase(geom);
+        // Masks and field-1 entries per chunk of particles, in parallel; the chunks' entries
+        // are concatenated in particle order, so the result is the same for any thread count.
+        const CHUNK: usize = 4096;
+        let mut chunks = std::mem::take(&mut self.chunk_entries);
+        chunks.resize_with(kin.len().div_ceil(CHUNK), Default::default);
+        let this = &*self;
+        fmask
+            .par_chunks_mut(CHUNK)
+            .zip(kin.par_chunks(CHUNK))
+            .zip(mech.par_chunks(CHUNK))
+            .zip(chunks.par_iter_mut())
+            .for_each(|(((fm, kn), me), (entries, err))| {
+                entries.clear();
+                *err = None;
+                if let Err(e) = this.masks(geom, shape, kn, me, fm, entries) {
+                    *err = Some(e);
+                }
+            });
+        let mut entries = std::mem::take(&mut self.entries);
+        entries.clear();
+        let mut first_error = None;
+        for (chunk, err) in &chunks {
+            if let Some(e) = err {
+                first_error = Some(*e);
+                break;
+            }
+            entries.extend_from_slice(chunk);
+        }
+        self.chunk_entries = chunks;
+        if let Some(e) = first_error {
+            self.entries = entries;
+            return Err(e);
         }
         entries.sort_unstable_by_key(|e| (e.0, e.1));
         f1_index.clear();
