@@ -114,6 +114,9 @@ impl Crack {
 /// particle (+1 above, −1 below), normal of the crossed segment.
 type FieldEntry = (u32, u32, i32, [f64; 2]);
 
+/// Entries of one chunk of the parallel mask pass and its first error (node, fields needed).
+type ChunkEntries = (Vec<FieldEntry>, Option<(usize, u32)>);
+
 /// Field-1 node record: which side field 1 holds, the contact normal, the crack.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct SlotInfo {
@@ -140,7 +143,7 @@ pub struct Cracks {
     cell_segs: Vec<(u32, u32)>,
     entries: Vec<FieldEntry>,
     /// Per-chunk entries and first error of the parallel mask pass.
-    chunk_entries: Vec<(Vec<FieldEntry>, Option<(usize, u32)>)>,
+    chunk_entries: Vec<ChunkEntries>,
     /// Normal contact impulse |Δp_n| of the last force-stage contact at each node (dense over
     /// grid storage): the friction capacity of faces that are in contact but not approaching
     /// at the extrapolation stages.
