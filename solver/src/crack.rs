@@ -769,6 +769,16 @@ struct TipJ {
     j: [f64; 2],
 }
 
+/// J of a tip in its own frame: e1 ahead along the crack, e2 to its left.
+#[derive(Debug, Clone, Copy)]
+struct TipFrameJ {
+    tip: [f64; 2],
+    e1: [f64; 2],
+    e2: [f64; 2],
+    j1: f64,
+    j2: f64,
+}
+
 /// Dynamic correction factors A_I(v), A_II(v) of a moving crack (plane strain,
 /// `reference-solutions.md`); 1 at rest, and 1 (static relation) where the sub-Rayleigh
 /// formula does not apply.
@@ -949,6 +959,20 @@ impl Cracks {
         tj
     }
 
+    /// J at tip `t` of crack `ci` rotated into the tip frame.
+    fn tip_frame_j(&mut self, ci: usize, t: usize, v: &View<'_>, time: f64) -> TipFrameJ {
+        let tj = self.tip_j(ci, t, v, time);
+        let (tip, e1) = self.cracks[ci].tip_frame(t);
+        let e2 = [-e1[1], e1[0]];
+        TipFrameJ {
+            tip,
+            e1,
+            e2,
+            j1: tj.j[0] * e1[0] + tj.j[1] * e1[1],
+            j2: tj.j[0] * e2[0] + tj.j[1] * e2[1],
+        }
+    }
+
     /// Moving-box tip speed over the speed window.
     fn tip_speed(&self, tip: &TipState, time: f64) -> f64 {
         let Some(&(t0, a0)) = tip
@@ -1010,12 +1034,14 @@ impl Cracks {
                 if !self.cracks[ci].tips[t].active {
                     continue;
                 }
-                let tj = self.tip_j(ci, t, v, time);
+                let TipFrameJ {
+                    tip,
+                    e1: _,
+                    e2: _,
+                    j1,
+                    j2,
+                } = self.tip_frame_j(ci, t, v, time);
                 let c = &self.cracks[ci];
-                let (tip, e1) = c.tip_frame(t);
-                let e2 = [-e1[1], e1[0]];
-                let j1 = tj.j[0] * e1[0] + tj.j[1] * e1[1];
-                let j2 = tj.j[0] * e2[0] + tj.j[1] * e2[1];
                 let speed = self.tip_speed(&c.tips[t], time);
                 let mat = &v.mats[self.nearest_material(v, tip)];
                 let [dn, dt] = self.tip_opening(ci, t);
@@ -1085,12 +1111,13 @@ impl Cracks {
                 if !self.cracks[ci].tips[t].active {
                     continue;
                 }
-                let tj = self.tip_j(ci, t, v, time);
-                let c = &self.cracks[ci];
-                let (tip, e1) = c.tip_frame(t);
-                let e2 = [-e1[1], e1[0]];
-                let j1 = tj.j[0] * e1[0] + tj.j[1] * e1[1];
-                let j2 = tj.j[0] * e2[0] + tj.j[1] * e2[1];
+                let TipFrameJ {
+                    tip,
+                    e1,
+                    e2,
+                    j1,
+                    j2,
+                } = self.tip_frame_j(ci, t, v, time);
                 let (g, dir) = match direction {
                     GrowthDirection::MaxEnergyRelease => {
                         let th = j2.atan2(j1);

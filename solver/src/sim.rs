@@ -883,6 +883,50 @@ fn first_fail(acc: &mut Acc, i: usize, kind: u8) {
     }
 }
 
+/// Velocity gradient of particle `i` from the nodal velocities (`Node::v`) of its own fields
+/// (pitfall 3), then a stress half-update over `half` with the strain energy density and, with
+/// cracks, the displacement gradient accumulated. Returns whether the new stress is finite.
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn stress_half_update(
+    p: &mut PartsMut<'_>,
+    g: &mut GridMut<'_>,
+    i: usize,
+    geom: &GridGeom,
+    slot_of: &[u32],
+    mats: &[Elastic],
+    half: f64,
+    inv_h: f64,
+) -> bool {
+    let w = p.wts[i];
+    let has_mask = !p.fmask.is_empty();
+    let mask = if has_mask { p.fmask[i] } else { 0 };
+    // L_ij = Σ_nodes v_i ∂S/∂x_j.
+    let mut l = [[0.0; 2]; 2];
+    visit_stencil(g, geom, &w, mask, slot_of, |a, b, n| {
+        let gr = w.g(a, b);
+        l[0][0] += n.v[0] * gr[0];
+        l[0][1] += n.v[0] * gr[1];
+        l[1][0] += n.v[1] * gr[0];
+        l[1][1] += n.v[1] * gr[1];
+    });
+    for r in &mut l {
+        r[0] *= inv_h;
+        r[1] *= inv_h;
+    }
+    let dw = mats[p.mech[i].mat as usize].update(&mut p.stress[i], l, half);
+    p.mech[i].w += dw;
+    if has_mask {
+        let gu = &mut p.grad_u[i];
+        gu[0] += l[0][0] * half;
+        gu[1] += l[0][1] * half;
+        gu[2] += l[1][0] * half;
+        gu[3] += l[1][1] * half;
+    }
+    let s = p.stress[i];
+    s[0].is_finite() && s[1].is_finite() && s[2].is_finite()
+}
+
 impl Simulation {
     /// Run `f` on every strip (even colour, then odd) and merge the results in strip order.
     fn strips<F>(&mut self, f: &F) -> Acc
@@ -963,40 +1007,17 @@ impl Simulation {
         let slot_of = std::mem::take(&mut self.slot_of);
         let mats = std::mem::take(&mut self.mats);
         let loads = std::mem::take(&mut self.load_now);
-        let acc = self.strips(&|_s, first, p, mut g| {
+        let acc = self.strips(&|_s, first, mut p, mut g| {
             let mut acc = Acc::default();
             let has_mask = !p.fmask.is_empty();
             for i in 0..p.len() {
                 let mech = p.mech[i];
                 let w = p.wts[i];
                 let mask = if has_mask { p.fmask[i] } else { 0 };
-                // L_ij = Σ_nodes v_i ∂S/∂x_j, each node giving its particle's field (pitfall 3).
-                let mut l = [[0.0; 2]; 2];
-                visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
-                    let gr = w.g(a, b);
-                    l[0][0] += n.v[0] * gr[0];
-                    l[0][1] += n.v[0] * gr[1];
-                    l[1][0] += n.v[1] * gr[0];
-                    l[1][1] += n.v[1] * gr[1];
-                });
-                for r in &mut l {
-                    r[0] *= inv_h;
-                    r[1] *= inv_h;
-                }
-                let mat = &mats[mech.mat as usize];
-                let dw = mat.update(&mut p.stress[i], l, half);
-                p.mech[i].w += dw;
-                if has_mask {
-                    let gu = &mut p.grad_u[i];
-                    gu[0] += l[0][0] * half;
-                    gu[1] += l[0][1] * half;
-                    gu[2] += l[1][0] * half;
-                    gu[3] += l[1][1] * half;
-                }
-                let s = p.stress[i];
-                if !(s[0].is_finite() && s[1].is_finite() && s[2].is_finite()) {
+                if !stress_half_update(&mut p, &mut g, i, &geom, &slot_of, &mats, half, inv_h) {
                     first_fail(&mut acc, first + i, FAIL_STRESS);
                 }
+                let s = p.stress[i];
                 // External force: traction × edge length (2l = h/ppc) × thickness.
                 let fext = if mech.load > 0 {
                     let t = loads[mech.load as usize - 1];
@@ -1107,39 +1128,14 @@ impl Simulation {
         let inv_h = 1.0 / geom.h;
         let slot_of = std::mem::take(&mut self.slot_of);
         let mats = std::mem::take(&mut self.mats);
-        let acc = self.strips(&|_s, first, p, mut g| {
+        let acc = self.strips(&|_s, first, mut p, mut g| {
             let mut acc = Acc::default();
-            let has_mask = !p.fmask.is_empty();
             for i in 0..p.len() {
                 let mech = p.mech[i];
-                let w = p.wts[i];
-                let mask = if has_mask { p.fmask[i] } else { 0 };
-                let mut l = [[0.0; 2]; 2];
-                visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
-                    let gr = w.g(a, b);
-                    l[0][0] += n.v[0] * gr[0];
-                    l[0][1] += n.v[0] * gr[1];
-                    l[1][0] += n.v[1] * gr[0];
-                    l[1][1] += n.v[1] * gr[1];
-                });
-                for r in &mut l {
-                    r[0] *= inv_h;
-                    r[1] *= inv_h;
-                }
-                let dw = mats[mech.mat as usize].update(&mut p.stress[i], l, half);
-                let wnew = mech.w + dw;
-                p.mech[i].w = wnew;
-                if has_mask {
-                    let gu = &mut p.grad_u[i];
-                    gu[0] += l[0][0] * half;
-                    gu[1] += l[0][1] * half;
-                    gu[2] += l[1][0] * half;
-                    gu[3] += l[1][1] * half;
-                }
-                let s = p.stress[i];
-                if !(s[0].is_finite() && s[1].is_finite() && s[2].is_finite()) {
+                if !stress_half_update(&mut p, &mut g, i, &geom, &slot_of, &mats, half, inv_h) {
                     first_fail(&mut acc, first + i, FAIL_STRESS);
                 }
+                let wnew = p.mech[i].w;
                 acc.e += mech.vol * wnew;
                 p.kin[i].x = p.x_next[i];
             }
