@@ -101,6 +101,9 @@ pub struct JobInfo {
     pub summary: Option<Summary>,
     /// Why the job failed or was cancelled.
     pub message: Option<String>,
+    /// The sweep the job belongs to (extension of `api.md`; absent for a lone job).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub sweep_id: Option<String>,
 }
 
 /// One problem in an error body.

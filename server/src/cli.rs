@@ -57,6 +57,9 @@ pub struct ServeArgs {
     /// Largest request body of the public API (bytes).
     #[arg(long, env = "FRACTURE_MAX_BODY_BYTES", default_value_t = Limits::default().max_body_bytes)]
     pub max_body_bytes: usize,
+    /// Most jobs (parameter combinations) one sweep may create.
+    #[arg(long, env = "FRACTURE_MAX_SWEEP_JOBS", default_value_t = Limits::default().max_sweep_jobs)]
+    pub max_sweep_jobs: u64,
 }
 
 #[derive(Parser, Debug)]
@@ -204,6 +207,7 @@ async fn serve_async(a: ServeArgs) -> anyhow::Result<()> {
             max_steps: a.max_steps,
             max_snapshot_volume: a.max_snapshot_volume,
             max_body_bytes: a.max_body_bytes,
+            max_sweep_jobs: a.max_sweep_jobs,
             ..Limits::default()
         },
         local_workers: workers,

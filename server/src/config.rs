@@ -21,6 +21,8 @@ pub struct Limits {
     pub max_body_bytes: usize,
     /// Largest request body of the worker API (bytes; snapshots are large).
     pub max_worker_body_bytes: usize,
+    /// Most jobs (parameter combinations) one sweep may create.
+    pub max_sweep_jobs: u64,
 }
 
 impl Default for Limits {
@@ -31,6 +33,7 @@ impl Default for Limits {
             max_snapshot_volume: 400_000_000,
             max_body_bytes: 4 << 20,
             max_worker_body_bytes: 512 << 20,
+            max_sweep_jobs: 100,
         }
     }
 }

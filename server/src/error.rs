@@ -27,6 +27,15 @@ pub enum ApiError {
         /// One entry per exceeded limit.
         details: Vec<ErrorDetail>,
     },
+    /// 422: a sweep's parameters do not apply to its scene, or a combination is not a
+    /// valid scene (each detail names the field path; the message the parameter and value).
+    #[error("{message}")]
+    InvalidSweep {
+        /// The first problem, naming the parameter path and value.
+        message: String,
+        /// One entry per problem.
+        details: Vec<ErrorDetail>,
+    },
     /// 401: missing or wrong token.
     #[error("{0}")]
     Unauthorized(String),
@@ -60,9 +69,9 @@ impl ApiError {
     pub fn status(&self) -> StatusCode {
         match self {
             ApiError::BadRequest(_) => StatusCode::BAD_REQUEST,
-            ApiError::InvalidScene(_) | ApiError::LimitExceeded { .. } => {
-                StatusCode::UNPROCESSABLE_ENTITY
-            }
+            ApiError::InvalidScene(_)
+            | ApiError::LimitExceeded { .. }
+            | ApiError::InvalidSweep { .. } => StatusCode::UNPROCESSABLE_ENTITY,
             ApiError::Unauthorized(_) => StatusCode::UNAUTHORIZED,
             ApiError::NotFound(_) => StatusCode::NOT_FOUND,
             ApiError::Conflict(_) => StatusCode::CONFLICT,
@@ -78,6 +87,7 @@ impl ApiError {
             ApiError::BadRequest(_) => ("bad_request", vec![]),
             ApiError::InvalidScene(d) => ("invalid_scene", d.clone()),
             ApiError::LimitExceeded { details, .. } => ("limit_exceeded", details.clone()),
+            ApiError::InvalidSweep { details, .. } => ("invalid_sweep", details.clone()),
             ApiError::Unauthorized(_) => ("unauthorized", vec![]),
             ApiError::NotFound(_) => ("not_found", vec![]),
             ApiError::Conflict(_) => ("conflict", vec![]),

@@ -21,6 +21,7 @@ pub mod render;
 pub mod routes;
 pub mod server;
 pub mod store;
+pub mod sweep;
 
 pub use config::Config;
 pub use error::ApiError;

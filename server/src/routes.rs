@@ -32,7 +32,8 @@ use crate::protocol::{
 };
 use crate::render;
 use crate::server::{AppState, new_job_id};
-use crate::store::{ListFilter, NewJob, StoreError};
+use crate::store::{JobRow, ListFilter, NewJob, NewSweep, NewSweepJob, StoreError, SweepRow};
+use crate::sweep::{self, SweepInfo, SweepJob, SweepParameter, SweepRequest};
 
 impl From<StoreError> for ApiError {
     fn from(e: StoreError) -> Self {
@@ -53,12 +54,13 @@ impl From<StoreError> for ApiError {
     ),
     tags(
         (name = "jobs", description = "Submit and follow simulation jobs"),
+        (name = "sweeps", description = "Parameter sweeps: one job per combination of values"),
         (name = "results", description = "What a run produced"),
         (name = "scenes", description = "Example scenes and validation"),
         (name = "service", description = "Health"),
         (name = "worker", description = "Worker protocol (worker token)")
     ),
-    components(schemas(ErrorDoc)),
+    components(schemas(ErrorDoc, SweepInfo, SweepJob, SweepParameter)),
     modifiers(&BearerAuth)
 )]
 struct ApiDoc;
@@ -105,6 +107,9 @@ pub fn app(state: AppState) -> Router {
         .routes(routes!(snapshot_png))
         .routes(routes!(fields_mcap))
         .routes(routes!(job_events))
+        .routes(routes!(create_sweep, list_sweeps))
+        .routes(routes!(get_sweep, delete_sweep))
+        .routes(routes!(cancel_sweep))
         .layer(DefaultBodyLimit::max(limits.max_body_bytes))
         .layer(Extension(BodyLimit(limits.max_body_bytes)));
     let worker = OpenApiRouter::new()
@@ -648,6 +653,451 @@ async fn job_events(
     use futures::StreamExt;
     let stream = futures::stream::iter(first.into_iter().map(Ok)).chain(live);
     Ok(Sse::new(stream).keep_alive(KeepAlive::new().interval(Duration::from_secs(10))))
+}
+
+// ---------------------------------------------------------------------------------------
+// Sweeps (extension of api.md, see docs/service.md)
+
+/// Details of a sweep error are capped so a large grid of bad values stays readable.
+const MAX_SWEEP_DETAILS: usize = 20;
+
+fn sweep_info(row: &SweepRow, jobs: &[JobRow], full: bool) -> SweepInfo {
+    let statuses: Vec<JobStatus> = jobs.iter().map(JobRow::status).collect();
+    let mut counts: BTreeMap<String, u64> = [
+        JobStatus::Queued,
+        JobStatus::Running,
+        JobStatus::Completed,
+        JobStatus::Failed,
+        JobStatus::Cancelled,
+    ]
+    .iter()
+    .map(|s| (s.as_str().to_string(), 0))
+    .collect();
+    for s in &statuses {
+        *counts.entry(s.as_str().to_string()).or_default() += 1;
+    }
+    let fraction = |j: &JobRow| -> f64 {
+        if j.status().is_terminal() {
+            1.0
+        } else {
+            j.progress()
+                .map(|p| p.fraction.clamp(0.0, 1.0))
+                .unwrap_or(0.0)
+        }
+    };
+    let progress = if jobs.is_empty() {
+        0.0
+    } else {
+        jobs.iter().map(fraction).sum::<f64>() / jobs.len() as f64
+    };
+    SweepInfo {
+        id: row.id.clone(),
+        name: row.name.clone(),
+        created_at: row.created_at.clone(),
+        priority: row.priority,
+        labels: serde_json::from_str(&row.labels).unwrap_or_default(),
+        parameters: serde_json::from_str(&row.parameters).unwrap_or_default(),
+        status: sweep::overall_status(&statuses).to_string(),
+        total: jobs.len() as u64,
+        counts,
+        progress,
+        scene: if full {
+            serde_json::from_str(&row.scene).ok()
+        } else {
+            None
+        },
+        jobs: full.then(|| {
+            jobs.iter()
+                .map(|j| SweepJob {
+                    id: j.id.clone(),
+                    index: j.sweep_index.unwrap_or(0).max(0) as u32,
+                    label: j.sweep_label.clone().unwrap_or_default(),
+                    values: j
+                        .sweep_values
+                        .as_deref()
+                        .and_then(|v| serde_json::from_str(v).ok())
+                        .unwrap_or_default(),
+                    name: j.name.clone(),
+                    status: j.status(),
+                    progress: j.progress(),
+                    started_at: j.started_at.clone(),
+                    finished_at: j.finished_at.clone(),
+                    message: j.message.clone(),
+                    summary: j
+                        .summary
+                        .as_deref()
+                        .and_then(|s| serde_json::from_str(s).ok()),
+                })
+                .collect()
+        }),
+    }
+}
+
+async fn sweep_or_404(st: &AppState, id: &str) -> Result<SweepRow, ApiError> {
+    st.store
+        .sweep(id)
+        .await?
+        .ok_or_else(|| ApiError::NotFound(format!("no sweep with id `{id}`")))
+}
+
+fn invalid_sweep(mut details: Vec<fracture_api::jobs::ErrorDetail>, message: String) -> ApiError {
+    let extra = details.len().saturating_sub(MAX_SWEEP_DETAILS);
+    details.truncate(MAX_SWEEP_DETAILS);
+    if extra > 0 {
+        details.push(fracture_api::jobs::ErrorDetail {
+            path: "parameters".into(),
+            message: format!("… and {extra} more problems"),
+        });
+    }
+    ApiError::InvalidSweep { message, details }
+}
+
+/// The parameter of a sweep a field path belongs to (the longest parameter path equal to
+/// it or a prefix of it).
+fn responsible<'a>(params: &'a [SweepParameter], field: &str) -> Option<(usize, &'a str)> {
+    params
+        .iter()
+        .enumerate()
+        .filter(|(_, p)| {
+            field == p.path
+                || field.starts_with(&format!("{}.", p.path))
+                || p.path.starts_with(&format!("{field}."))
+        })
+        .max_by_key(|(_, p)| p.path.len())
+        .map(|(i, p)| (i, p.path.as_str()))
+}
+
+/// Create a sweep: one job per combination of the parameter values (every combination is
+/// validated before any job is queued).
+#[utoipa::path(post, path = "/api/v1/sweeps", tag = "sweeps",
+    request_body(content = Object, description = "`{\"scene\": {...}, \"parameters\": {\"cracks.0.propagation.toughness\": [25, 100, 250], ...}, \"name\": \"...\", \"priority\": 0, \"labels\": {...}}`",
+        content_type = "application/json"),
+    responses(
+        (status = 201, description = "The sweep with its queued jobs", body = SweepInfo),
+        (status = 400, description = "Malformed JSON", body = ErrorDoc),
+        (status = 401, description = "Missing or wrong API token", body = ErrorDoc),
+        (status = 413, description = "Body too large", body = ErrorDoc),
+        (status = 422, description = "`invalid_sweep` (a path or a combination is not valid; details name the field path, the message the parameter and value) or `limit_exceeded` (too many combinations, or a combination over a scene limit)", body = ErrorDoc)),
+    security(("bearer" = [])))]
+async fn create_sweep(
+    State(st): State<AppState>,
+    headers: HeaderMap,
+    RawBody(body): RawBody,
+) -> Result<(StatusCode, HeaderMap, Json<SweepInfo>), ApiError> {
+    use fracture_api::jobs::ErrorDetail;
+    require_api_token(&st, &headers)?;
+    if st.shutting_down() {
+        return Err(ApiError::Unavailable);
+    }
+    // Malformed JSON is a 400; the typed parse reads the text again so that the
+    // parameters keep the client's order (`serde_json::Value` sorts object keys).
+    let _: serde_json::Value = parse_json(&body)?;
+    let mut de = serde_json::Deserializer::from_slice(&body);
+    let req: SweepRequest = serde_path_to_error::deserialize(&mut de).map_err(|e| {
+        let path = e.path().to_string();
+        let msg = e.into_inner().to_string();
+        invalid_sweep(
+            vec![ErrorDetail {
+                path: path.clone(),
+                message: msg.clone(),
+            }],
+            format!("the sweep request is not valid: {path}: {msg}"),
+        )
+    })?;
+    let params = req.parameters.0;
+    if params.is_empty() {
+        return Err(invalid_sweep(
+            vec![ErrorDetail {
+                path: "parameters".into(),
+                message: "name at least one parameter, e.g. {\"cracks.0.propagation.toughness\": [25, 100]}".into(),
+            }],
+            "the sweep has no parameters".into(),
+        ));
+    }
+    if let Some(p) = params.iter().find(|p| p.values.is_empty()) {
+        return Err(invalid_sweep(
+            vec![ErrorDetail {
+                path: format!("parameters.{}", p.path),
+                message: "the list of values is empty".into(),
+            }],
+            format!("parameter `{}` has no values", p.path),
+        ));
+    }
+    let count = sweep::combination_count(&params);
+    let limit = st.cfg.limits.max_sweep_jobs;
+    if count > limit {
+        let sizes: Vec<String> = params.iter().map(|p| p.values.len().to_string()).collect();
+        let message = format!(
+            "the sweep has {count} combinations ({}), more than this server's limit max_sweep_jobs = {limit}",
+            sizes.join(" × ")
+        );
+        return Err(ApiError::LimitExceeded {
+            details: vec![ErrorDetail {
+                path: "parameters".into(),
+                message: message.clone(),
+            }],
+            message,
+        });
+    }
+    // Every path must lead into the base scene.
+    let path_errors: Vec<ErrorDetail> = params
+        .iter()
+        .filter_map(|p| {
+            let mut probe = req.scene.clone();
+            let v = p.values.first().cloned().unwrap_or(serde_json::Value::Null);
+            sweep::set_path(&mut probe, &p.path, v).err()
+        })
+        .map(|e| ErrorDetail {
+            path: format!("parameters.{}", e.path),
+            message: e.reason,
+        })
+        .collect();
+    if let Some(first) = path_errors.first() {
+        let message = format!("{}: {}", first.path, first.message);
+        return Err(invalid_sweep(path_errors, message));
+    }
+    if !req.scene.is_object() {
+        return Err(invalid_sweep(
+            vec![ErrorDetail {
+                path: "scene".into(),
+                message: "the base scene must be a JSON object".into(),
+            }],
+            "the base scene must be a JSON object".into(),
+        ));
+    }
+    // Build and validate every combination before storing anything.
+    let names = sweep::short_names(&params);
+    let sweep_id = new_job_id();
+    let base_name = req
+        .scene
+        .get("name")
+        .and_then(|n| n.as_str())
+        .unwrap_or("untitled")
+        .to_string();
+    let mut jobs = Vec::new();
+    let mut problems: Vec<ErrorDetail> = Vec::new();
+    let mut first_problem: Option<String> = None;
+    for combo in sweep::combinations(&params) {
+        let label = sweep::label(&names, &params, &combo);
+        let mut doc = req.scene.clone();
+        let mut values = serde_json::Map::new();
+        for (p, &i) in params.iter().zip(&combo) {
+            let v = p.values.get(i).cloned().unwrap_or(serde_json::Value::Null);
+            values.insert(p.path.clone(), v.clone());
+            sweep::set_path(&mut doc, &p.path, v)
+                .map_err(|e| ApiError::BadRequest(e.to_string()))?;
+        }
+        let checked = validate::scene_from_value(doc)
+            .map_err(ApiError::from)
+            .and_then(|scene| check_scene(&st, &scene).map(|_| scene));
+        let scene = match checked {
+            Ok(scene) => scene,
+            Err(e) => {
+                let details = match e {
+                    ApiError::InvalidScene(d) | ApiError::LimitExceeded { details: d, .. } => d,
+                    other => return Err(other),
+                };
+                for d in details {
+                    let blame = match responsible(&params, &d.path) {
+                        Some((i, path)) => format!(
+                            "parameter `{path}` = {}",
+                            params[i]
+                                .values
+                                .get(combo[i])
+                                .map(|v| v.to_string())
+                                .unwrap_or_default()
+                        ),
+                        None => format!("combination `{label}`"),
+                    };
+                    let message = format!("with {blame} ({label}): {}", d.message);
+                    if first_problem.is_none() {
+                        first_problem = Some(format!(
+                            "the sweep's combination `{label}` is not a valid scene: {blame}: {}: {}",
+                            d.path, d.message
+                        ));
+                    }
+                    problems.push(ErrorDetail {
+                        path: d.path,
+                        message,
+                    });
+                }
+                continue;
+            }
+        };
+        let mut labels = req.labels.clone();
+        labels.insert("sweep".into(), sweep_id.clone());
+        for (n, (p, &i)) in names.iter().zip(params.iter().zip(&combo)) {
+            labels.insert(
+                n.clone(),
+                p.values.get(i).map(sweep::value_text).unwrap_or_default(),
+            );
+        }
+        jobs.push(NewSweepJob {
+            job: NewJob {
+                id: new_job_id(),
+                name: format!("{base_name} ({label})"),
+                scene: scene.canonical_json(),
+                end_time: scene.time.end,
+                priority: req.priority,
+                labels,
+            },
+            label,
+            values: serde_json::Value::Object(values).to_string(),
+        });
+    }
+    if let Some(message) = first_problem {
+        return Err(invalid_sweep(problems, message));
+    }
+    let new = NewSweep {
+        id: sweep_id,
+        name: req
+            .name
+            .filter(|n| !n.trim().is_empty())
+            .unwrap_or(base_name),
+        scene: req.scene.to_string(),
+        parameters: serde_json::to_string(&params).map_err(ApiError::internal)?,
+        priority: req.priority,
+        labels: req.labels,
+    };
+    let row = st.store.create_sweep(&new, &jobs).await?;
+    st.queue_changed.notify_waiters();
+    let stored = st.store.sweep_jobs(&row.id).await?;
+    tracing::info!(sweep = %row.id, jobs = stored.len(), "sweep created");
+    let mut h = HeaderMap::new();
+    if let Ok(v) = HeaderValue::from_str(&format!("/api/v1/sweeps/{}", row.id)) {
+        h.insert(header::LOCATION, v);
+    }
+    Ok((
+        StatusCode::CREATED,
+        h,
+        Json(sweep_info(&row, &stored, true)),
+    ))
+}
+
+/// Query of `GET /api/v1/sweeps`.
+#[derive(Debug, Deserialize, utoipa::IntoParams)]
+struct SweepListQuery {
+    /// Page size (default 50, at most 500).
+    limit: Option<i64>,
+    /// The `X-Next-Cursor` of the previous page.
+    cursor: Option<String>,
+}
+
+/// Sweeps, newest first, with their job counts and progress (next page: the
+/// `X-Next-Cursor` response header).
+#[utoipa::path(get, path = "/api/v1/sweeps", tag = "sweeps", params(SweepListQuery),
+    responses((status = 200, description = "Sweeps without scene and jobs", body = Vec<SweepInfo>),
+        (status = 400, description = "Bad parameter", body = ErrorDoc)))]
+async fn list_sweeps(
+    State(st): State<AppState>,
+    Query(q): Query<SweepListQuery>,
+) -> Result<Response, ApiError> {
+    let limit = q.limit.unwrap_or(50);
+    if !(1..=500).contains(&limit) {
+        return Err(ApiError::BadRequest("limit must be in 1..=500".into()));
+    }
+    let before = match q.cursor.as_deref() {
+        None | Some("") => None,
+        Some(c) => Some(
+            c.parse::<i64>()
+                .map_err(|_| ApiError::BadRequest(format!("bad cursor `{c}`")))?,
+        ),
+    };
+    let rows = st.store.sweeps(limit, before).await?;
+    let mut out = Vec::with_capacity(rows.len());
+    for r in &rows {
+        let jobs = st.store.sweep_jobs(&r.id).await?;
+        out.push(sweep_info(r, &jobs, false));
+    }
+    let next = (rows.len() as i64 == limit)
+        .then(|| rows.last().map(|r| r.seq))
+        .flatten();
+    let mut resp = Json(out).into_response();
+    if let Some(n) = next
+        && let Ok(v) = HeaderValue::from_str(&n.to_string())
+    {
+        resp.headers_mut().insert("x-next-cursor", v);
+    }
+    Ok(resp)
+}
+
+/// One sweep with its base scene and every job's id, parameter values, label, status and
+/// progress.
+#[utoipa::path(get, path = "/api/v1/sweeps/{id}", tag = "sweeps",
+    params(("id" = String, Path, description = "Sweep id")),
+    responses((status = 200, description = "The sweep", body = SweepInfo),
+        (status = 404, description = "Unknown id", body = ErrorDoc)))]
+async fn get_sweep(
+    State(st): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Json<SweepInfo>, ApiError> {
+    let row = sweep_or_404(&st, &id).await?;
+    let jobs = st.store.sweep_jobs(&id).await?;
+    Ok(Json(sweep_info(&row, &jobs, true)))
+}
+
+/// Cancel every unfinished job of a sweep (queued at once, running within a second or two).
+#[utoipa::path(post, path = "/api/v1/sweeps/{id}/cancel", tag = "sweeps",
+    params(("id" = String, Path, description = "Sweep id")),
+    responses((status = 200, description = "The sweep after the request", body = SweepInfo),
+        (status = 401, description = "Missing or wrong API token", body = ErrorDoc),
+        (status = 404, description = "Unknown id", body = ErrorDoc)),
+    security(("bearer" = [])))]
+async fn cancel_sweep(
+    State(st): State<AppState>,
+    headers: HeaderMap,
+    Path(id): Path<String>,
+) -> Result<Json<SweepInfo>, ApiError> {
+    require_api_token(&st, &headers)?;
+    let row = sweep_or_404(&st, &id).await?;
+    for job in st.store.sweep_jobs(&id).await? {
+        if job.status().is_terminal() {
+            continue;
+        }
+        if let Some(after) = st.store.cancel(&job.id).await?
+            && after.status != job.status
+        {
+            st.announce(&after);
+        }
+    }
+    let jobs = st.store.sweep_jobs(&id).await?;
+    Ok(Json(sweep_info(&row, &jobs, true)))
+}
+
+/// Delete a finished sweep with its jobs and their files (409 while a job is unfinished).
+#[utoipa::path(delete, path = "/api/v1/sweeps/{id}", tag = "sweeps",
+    params(("id" = String, Path, description = "Sweep id")),
+    responses((status = 204, description = "Deleted"),
+        (status = 401, description = "Missing or wrong API token", body = ErrorDoc),
+        (status = 404, description = "Unknown id", body = ErrorDoc),
+        (status = 409, description = "A job of the sweep has not finished", body = ErrorDoc)),
+    security(("bearer" = [])))]
+async fn delete_sweep(
+    State(st): State<AppState>,
+    headers: HeaderMap,
+    Path(id): Path<String>,
+) -> Result<StatusCode, ApiError> {
+    require_api_token(&st, &headers)?;
+    sweep_or_404(&st, &id).await?;
+    let jobs = st.store.sweep_jobs(&id).await?;
+    if let Some(j) = jobs.iter().find(|j| !j.status().is_terminal()) {
+        return Err(ApiError::Conflict(format!(
+            "job `{}` of sweep `{id}` is {}; cancel the sweep first",
+            j.id, j.status
+        )));
+    }
+    for j in &jobs {
+        if st.store.delete(&j.id).await? {
+            let files = st.files.clone();
+            let jid = j.id.clone();
+            tokio::task::spawn_blocking(move || files.delete(&jid))
+                .await
+                .map_err(ApiError::internal)?
+                .map_err(ApiError::internal)?;
+        }
+    }
+    st.store.delete_sweep(&id).await?;
+    Ok(StatusCode::NO_CONTENT)
 }
 
 // ---------------------------------------------------------------------------------------

@@ -84,6 +84,14 @@ pub struct JobRow {
     pub summary: Option<String>,
     /// Why it failed or was cancelled.
     pub message: Option<String>,
+    /// The sweep the job belongs to.
+    pub sweep_id: Option<String>,
+    /// Place of the job in its sweep (order of the combinations).
+    pub sweep_index: Option<i64>,
+    /// Label of the job's combination, e.g. `toughness=100`.
+    pub sweep_label: Option<String>,
+    /// The job's parameter values, `{"path": value}` as JSON.
+    pub sweep_values: Option<String>,
 }
 
 impl JobRow {
@@ -114,6 +122,7 @@ impl JobRow {
                 .as_deref()
                 .and_then(|s| serde_json::from_str(s).ok()),
             message: self.message.clone(),
+            sweep_id: self.sweep_id.clone(),
         }
     }
     /// Latest progress.
@@ -172,6 +181,55 @@ pub struct NewJob {
     pub labels: BTreeMap<String, String>,
 }
 
+/// A sweep as stored.
+#[derive(Debug, Clone, sqlx::FromRow)]
+pub struct SweepRow {
+    /// Insertion order (cursor of lists).
+    pub seq: i64,
+    /// Sweep id.
+    pub id: String,
+    /// Name.
+    pub name: String,
+    /// Base scene JSON.
+    pub scene: String,
+    /// `[{"path", "values"}]` JSON.
+    pub parameters: String,
+    /// Priority of its jobs.
+    pub priority: i64,
+    /// Labels given with the request (JSON object).
+    pub labels: String,
+    /// RFC 3339.
+    pub created_at: String,
+}
+
+/// A new sweep.
+#[derive(Debug, Clone)]
+pub struct NewSweep {
+    /// Sweep id.
+    pub id: String,
+    /// Name.
+    pub name: String,
+    /// Base scene JSON.
+    pub scene: String,
+    /// `[{"path", "values"}]` JSON.
+    pub parameters: String,
+    /// Priority of its jobs.
+    pub priority: i64,
+    /// Labels given with the request.
+    pub labels: BTreeMap<String, String>,
+}
+
+/// One job of a new sweep.
+#[derive(Debug, Clone)]
+pub struct NewSweepJob {
+    /// The job.
+    pub job: NewJob,
+    /// Label of its combination.
+    pub label: String,
+    /// `{"path": value}` JSON.
+    pub values: String,
+}
+
 /// Handle to the database (cheap to clone).
 #[derive(Debug, Clone)]
 pub struct Store {
@@ -218,6 +276,97 @@ impl Store {
         .fetch_one(&self.pool)
         .await?;
         Ok(row)
+    }
+
+    /// Insert a sweep and all its jobs (queued) in one transaction.
+    pub async fn create_sweep(
+        &self,
+        sw: &NewSweep,
+        jobs: &[NewSweepJob],
+    ) -> Result<SweepRow, StoreError> {
+        let mut tx = self.pool.begin().await?;
+        let labels = serde_json::to_string(&sw.labels).unwrap_or_else(|_| "{}".into());
+        let row = sqlx::query_as::<_, SweepRow>(
+            "INSERT INTO sweeps (id, name, scene, parameters, priority, labels, created_at)
+             VALUES (?, ?, ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'))
+             RETURNING *",
+        )
+        .bind(&sw.id)
+        .bind(&sw.name)
+        .bind(&sw.scene)
+        .bind(&sw.parameters)
+        .bind(sw.priority)
+        .bind(labels)
+        .fetch_one(&mut *tx)
+        .await?;
+        for (i, j) in jobs.iter().enumerate() {
+            let labels = serde_json::to_string(&j.job.labels).unwrap_or_else(|_| "{}".into());
+            sqlx::query(
+                "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at,
+                                   sweep_id, sweep_index, sweep_label, sweep_values)
+                 VALUES (?, ?, 'queued', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'), ?, ?, ?, ?)",
+            )
+            .bind(&j.job.id)
+            .bind(&j.job.name)
+            .bind(j.job.priority)
+            .bind(labels)
+            .bind(&j.job.scene)
+            .bind(j.job.end_time)
+            .bind(&sw.id)
+            .bind(i as i64)
+            .bind(&j.label)
+            .bind(&j.values)
+            .execute(&mut *tx)
+            .await?;
+        }
+        tx.commit().await?;
+        Ok(row)
+    }
+
+    /// One sweep.
+    pub async fn sweep(&self, id: &str) -> Result<Option<SweepRow>, StoreError> {
+        Ok(
+            sqlx::query_as::<_, SweepRow>("SELECT * FROM sweeps WHERE id = ?")
+                .bind(id)
+                .fetch_optional(&self.pool)
+                .await?,
+        )
+    }
+
+    /// Sweeps, newest first: at most `limit`, older than `before_seq` when given.
+    pub async fn sweeps(
+        &self,
+        limit: i64,
+        before_seq: Option<i64>,
+    ) -> Result<Vec<SweepRow>, StoreError> {
+        Ok(sqlx::query_as::<_, SweepRow>(
+            "SELECT * FROM sweeps WHERE (? IS NULL OR seq < ?) ORDER BY seq DESC LIMIT ?",
+        )
+        .bind(before_seq)
+        .bind(before_seq)
+        .bind(limit)
+        .fetch_all(&self.pool)
+        .await?)
+    }
+
+    /// The jobs of a sweep, in the order of its combinations.
+    pub async fn sweep_jobs(&self, id: &str) -> Result<Vec<JobRow>, StoreError> {
+        Ok(sqlx::query_as::<_, JobRow>(
+            "SELECT * FROM jobs WHERE sweep_id = ? ORDER BY sweep_index, seq",
+        )
+        .bind(id)
+        .fetch_all(&self.pool)
+        .await?)
+    }
+
+    /// Delete a sweep row (its jobs are deleted one by one by the caller).
+    pub async fn delete_sweep(&self, id: &str) -> Result<bool, StoreError> {
+        let n = sqlx::query("DELETE FROM sweeps WHERE id = ?")
+            .bind(id)
+            .execute(&self.pool)
+            .await?
+            .rows_affected();
+        Ok(n == 1)
     }
 
     /// One job.

@@ -1,0 +1,322 @@
+//! The sweep routes driven through `app(state)` with `oneshot`, no socket: the cartesian
+//! product of jobs with labels, validation of every combination before anything is stored,
+//! the combination limit, listing with cursors, cancellation and deletion.
+
+#![allow(clippy::unwrap_used)]
+
+use axum::body::Body;
+use axum::http::{Request, StatusCode};
+use fracture_server::config::{Config, Limits};
+use fracture_server::files::JobFiles;
+use fracture_server::store::Store;
+use fracture_server::{AppState, app};
+use http_body_util::BodyExt;
+use serde_json::{Value, json};
+use tower::ServiceExt;
+
+async fn state(dir: &std::path::Path, token: Option<&str>) -> AppState {
+    let store = Store::open(&dir.join("t.db")).await.unwrap();
+    let cfg = Config {
+        api_token: token.map(String::from),
+        worker_token: "wt".into(),
+        limits: Limits {
+            max_particles: 1000,
+            max_sweep_jobs: 6,
+            ..Limits::default()
+        },
+        ..Config::default()
+    };
+    AppState::new(store, cfg, JobFiles::new(dir)).0
+}
+
+fn scene() -> Value {
+    json!({
+        "name": "unit",
+        "grid": { "cell_size": 0.001, "min": [0.0, 0.0], "max": [0.022, 0.012] },
+        "materials": { "m": { "model": "linear_elastic", "density": 1230.0,
+                              "youngs_modulus": 3.96e9, "poissons_ratio": 0.35 } },
+        "bodies": [ { "material": "m",
+                      "region": { "rectangle": { "min": [0.001, 0.001], "max": [0.021, 0.011] } },
+                      "particles_per_cell": 2 } ],
+        "boundary_conditions": [ { "region": { "rectangle": { "min": [0.0, 0.0], "max": [0.001, 0.012] } },
+                                   "velocity": { "x": 1.0 } } ],
+        "time": { "end": 1.0e-5 }
+    })
+}
+
+async fn call(st: &AppState, req: Request<Body>) -> (StatusCode, axum::http::HeaderMap, Value) {
+    let resp = app(st.clone()).oneshot(req).await.unwrap();
+    let status = resp.status();
+    let headers = resp.headers().clone();
+    let bytes = resp.into_body().collect().await.unwrap().to_bytes();
+    (
+        status,
+        headers,
+        serde_json::from_slice(&bytes).unwrap_or(Value::Null),
+    )
+}
+
+fn post(uri: &str, body: &Value, token: Option<&str>) -> Request<Body> {
+    let mut b = Request::post(uri).header("content-type", "application/json");
+    if let Some(t) = token {
+        b = b.header("authorization", format!("Bearer {t}"));
+    }
+    b.body(Body::from(body.to_string())).unwrap()
+}
+
+fn get(uri: &str) -> Request<Body> {
+    Request::get(uri).body(Body::empty()).unwrap()
+}
+
+#[tokio::test]
+async fn a_sweep_creates_one_labelled_job_per_combination() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    // Written as text: `json!` would sort the parameters, and their order matters.
+    let body = format!(
+        r#"{{"scene": {}, "parameters": {{"time.cfl": [0.25, 0.5],
+            "boundary_conditions.0.velocity.x": [1.0, 2.5, 4]}},
+            "priority": 3, "labels": {{"study": "unit"}}}}"#,
+        scene()
+    );
+    let req = Request::post("/api/v1/sweeps")
+        .header("content-type", "application/json")
+        .body(Body::from(body))
+        .unwrap();
+    let (s, h, v) = call(&st, req).await;
+    assert_eq!(s, StatusCode::CREATED, "{v}");
+    let id = v["id"].as_str().unwrap().to_string();
+    assert_eq!(
+        h.get("location").unwrap().to_str().unwrap(),
+        format!("/api/v1/sweeps/{id}")
+    );
+    assert_eq!(v["name"], "unit");
+    assert_eq!(v["total"], 6);
+    assert_eq!(v["status"], "queued");
+    assert_eq!(v["counts"]["queued"], 6);
+    assert_eq!(v["parameters"][0]["path"], "time.cfl");
+    assert_eq!(v["parameters"][1]["values"], json!([1.0, 2.5, 4]));
+    let jobs = v["jobs"].as_array().unwrap();
+    assert_eq!(jobs.len(), 6);
+    // Cartesian product, last parameter fastest; labels use short names.
+    assert_eq!(jobs[0]["label"], "cfl=0.25, velocity.x=1.0");
+    assert_eq!(jobs[5]["label"], "cfl=0.5, velocity.x=4");
+    assert_eq!(jobs[4]["values"]["boundary_conditions.0.velocity.x"], 2.5);
+    assert_eq!(jobs[4]["index"], 4);
+    assert_eq!(jobs[4]["name"], "unit (cfl=0.5, velocity.x=2.5)");
+    // Each job is a real job with the values set in its scene, the sweep's labels and its
+    // link to the sweep.
+    let jid = jobs[4]["id"].as_str().unwrap();
+    let (s, _, j) = call(&st, get(&format!("/api/v1/jobs/{jid}"))).await;
+    assert_eq!(s, StatusCode::OK);
+    assert_eq!(j["sweep_id"], id.as_str());
+    assert_eq!(j["priority"], 3);
+    assert_eq!(j["scene"]["time"]["cfl"], 0.5);
+    assert_eq!(j["scene"]["boundary_conditions"][0]["velocity"]["x"], 2.5);
+    assert_eq!(j["labels"]["sweep"], id.as_str());
+    assert_eq!(j["labels"]["cfl"], "0.5");
+    assert_eq!(j["labels"]["velocity.x"], "2.5");
+    assert_eq!(j["labels"]["study"], "unit");
+    // The jobs list carries the link too; a lone job has none.
+    let (_, _, lone) = call(&st, post("/api/v1/jobs", &scene(), None)).await;
+    assert!(lone.get("sweep_id").is_none(), "{lone}");
+    let (_, _, list) = call(&st, get("/api/v1/jobs?limit=10")).await;
+    let linked = list
+        .as_array()
+        .unwrap()
+        .iter()
+        .filter(|j| j["sweep_id"] == id.as_str())
+        .count();
+    assert_eq!(linked, 6);
+    // GET returns the same sweep with its base scene.
+    let (s, _, g) = call(&st, get(&format!("/api/v1/sweeps/{id}"))).await;
+    assert_eq!(s, StatusCode::OK);
+    assert_eq!(g["scene"]["name"], "unit");
+    assert_eq!(g["jobs"].as_array().unwrap().len(), 6);
+    assert_eq!(g["progress"], 0.0);
+}
+
+#[tokio::test]
+async fn bad_paths_values_and_sizes_are_refused_before_any_job_is_queued() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let count = || async {
+        let (_, _, v) = call(&st, get("/api/v1/jobs")).await;
+        v.as_array().map(Vec::len).unwrap_or(usize::MAX)
+    };
+    // A path that does not exist in the scene.
+    let body = json!({"scene": scene(), "parameters": {"cracks.0.propagation.toughness": [1, 2]}});
+    let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
+    assert_eq!(v["error"], "invalid_sweep");
+    assert_eq!(
+        v["details"][0]["path"],
+        "parameters.cracks.0.propagation.toughness"
+    );
+    assert!(
+        v["message"]
+            .as_str()
+            .unwrap()
+            .contains("the scene has no field `cracks`"),
+        "{v}"
+    );
+    // An index past the end.
+    let body = json!({"scene": scene(), "parameters": {"bodies.3.particles_per_cell": [1]}});
+    let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
+    assert!(v["message"].as_str().unwrap().contains("index 3"), "{v}");
+    // One bad value among good ones: the error names the parameter, the value and the
+    // validator's field path; nothing is stored.
+    let body = json!({"scene": scene(), "parameters": {
+        "time.cfl": [0.5, 0.25],
+        "materials.m.poissons_ratio": [0.3, 0.7],
+    }});
+    let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
+    assert_eq!(v["error"], "invalid_sweep");
+    let details = v["details"].as_array().unwrap();
+    assert_eq!(details.len(), 2, "{v}");
+    assert_eq!(details[0]["path"], "materials.m.poissons_ratio");
+    let m = details[0]["message"].as_str().unwrap();
+    assert!(
+        m.contains("parameter `materials.m.poissons_ratio` = 0.7") && m.contains("cfl=0.5"),
+        "{m}"
+    );
+    let m = v["message"].as_str().unwrap();
+    assert!(
+        m.contains("materials.m.poissons_ratio") && m.contains("0.7"),
+        "{m}"
+    );
+    // Values of the wrong type are caught the same way.
+    let body = json!({"scene": scene(), "parameters": {"time.end": ["soon"]}});
+    let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
+    assert!(
+        v["details"][0]["message"]
+            .as_str()
+            .unwrap()
+            .contains("parameter `time.end` = \"soon\""),
+        "{v}"
+    );
+    // Too many combinations (limit 6 here).
+    let body = json!({"scene": scene(), "parameters": {
+        "time.cfl": [0.1, 0.2, 0.3],
+        "boundary_conditions.0.velocity.x": [1, 2, 3],
+    }});
+    let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
+    assert_eq!(v["error"], "limit_exceeded");
+    assert!(
+        v["message"]
+            .as_str()
+            .unwrap()
+            .contains("9 combinations (3 × 3)")
+            && v["message"]
+                .as_str()
+                .unwrap()
+                .contains("max_sweep_jobs = 6"),
+        "{v}"
+    );
+    // No parameters, empty values, unknown fields, malformed JSON.
+    for body in [
+        json!({"scene": scene(), "parameters": {}}),
+        json!({"scene": scene(), "parameters": {"time.cfl": []}}),
+        json!({"scene": scene(), "parameters": {"time.cfl": [0.5]}, "colour": 1}),
+        json!({"parameters": {"time.cfl": [0.5]}}),
+    ] {
+        let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+        assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{body} → {v}");
+        assert_eq!(v["error"], "invalid_sweep", "{v}");
+    }
+    let req = Request::post("/api/v1/sweeps")
+        .header("content-type", "application/json")
+        .body(Body::from("{nope"))
+        .unwrap();
+    let (s, _, _) = call(&st, req).await;
+    assert_eq!(s, StatusCode::BAD_REQUEST);
+    assert_eq!(count().await, 0);
+    let (_, _, v) = call(&st, get("/api/v1/sweeps")).await;
+    assert_eq!(v, json!([]));
+}
+
+#[tokio::test]
+async fn sweeps_list_with_cursors_cancel_and_delete() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), Some("tok")).await;
+    let body = json!({"scene": scene(), "parameters": {"time.cfl": [0.25, 0.5]}, "name": "s"});
+    let (s, _, _) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    assert_eq!(s, StatusCode::UNAUTHORIZED);
+    let mut ids = Vec::new();
+    for _ in 0..3 {
+        let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, Some("tok"))).await;
+        assert_eq!(s, StatusCode::CREATED, "{v}");
+        ids.push(v["id"].as_str().unwrap().to_string());
+    }
+    let (s, h, v) = call(&st, get("/api/v1/sweeps?limit=2")).await;
+    assert_eq!(s, StatusCode::OK);
+    let page = v.as_array().unwrap();
+    assert_eq!(page.len(), 2);
+    assert_eq!(page[0]["id"], ids[2].as_str());
+    assert_eq!(page[0]["name"], "s");
+    assert_eq!(page[0]["total"], 2);
+    assert!(page[0].get("jobs").is_none() && page[0].get("scene").is_none());
+    let cursor = h
+        .get("x-next-cursor")
+        .unwrap()
+        .to_str()
+        .unwrap()
+        .to_string();
+    let (_, h, v) = call(&st, get(&format!("/api/v1/sweeps?limit=2&cursor={cursor}"))).await;
+    assert_eq!(v.as_array().unwrap().len(), 1);
+    assert_eq!(v[0]["id"], ids[0].as_str());
+    assert!(h.get("x-next-cursor").is_none());
+    let (s, _, _) = call(&st, get("/api/v1/sweeps?limit=0")).await;
+    assert_eq!(s, StatusCode::BAD_REQUEST);
+
+    // A sweep with unfinished jobs cannot be deleted; cancel it, then delete it.
+    let del = |id: &str| {
+        Request::delete(format!("/api/v1/sweeps/{id}"))
+            .header("authorization", "Bearer tok")
+            .body(Body::empty())
+            .unwrap()
+    };
+    let (s, _, v) = call(&st, del(&ids[0])).await;
+    assert_eq!(s, StatusCode::CONFLICT, "{v}");
+    let (s, _, v) = call(
+        &st,
+        post(
+            &format!("/api/v1/sweeps/{}/cancel", ids[0]),
+            &json!({}),
+            Some("tok"),
+        ),
+    )
+    .await;
+    assert_eq!(s, StatusCode::OK, "{v}");
+    assert_eq!(v["status"], "cancelled");
+    assert_eq!(v["counts"]["cancelled"], 2);
+    assert_eq!(v["progress"], 1.0);
+    let (s, _, _) = call(&st, del(&ids[0])).await;
+    assert_eq!(s, StatusCode::NO_CONTENT);
+    let (s, _, v) = call(&st, get(&format!("/api/v1/sweeps/{}", ids[0]))).await;
+    assert_eq!(s, StatusCode::NOT_FOUND);
+    assert_eq!(v["error"], "not_found");
+    let (_, _, jobs) = call(&st, get("/api/v1/jobs")).await;
+    assert_eq!(jobs.as_array().unwrap().len(), 4);
+    // Unknown ids.
+    let (s, _, _) = call(
+        &st,
+        post("/api/v1/sweeps/nope/cancel", &json!({}), Some("tok")),
+    )
+    .await;
+    assert_eq!(s, StatusCode::NOT_FOUND);
+    // The routes are in the OpenAPI document.
+    let (_, _, api) = call(&st, get("/api/v1/openapi.json")).await;
+    for p in [
+        "/api/v1/sweeps",
+        "/api/v1/sweeps/{id}",
+        "/api/v1/sweeps/{id}/cancel",
+    ] {
+        assert!(api["paths"][p].is_object(), "{p} missing");
+    }
+    assert!(api["components"]["schemas"]["SweepInfo"].is_object());
+}
