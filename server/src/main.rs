@@ -6,6 +6,7 @@ use std::process::ExitCode;
 use clap::{Parser, Subcommand};
 
 mod local;
+mod study;
 
 /// Dynamic fracture with the material point method: service and command-line tools.
 #[derive(Parser, Debug)]
@@ -43,6 +44,9 @@ enum Command {
     Schema,
     /// Benchmarks: throughput (particle-steps per second) and more.
     Bench(local::BenchArgs),
+    /// Studies: the seed's Rosakis parameter sweeps, with figures and the claims table
+    /// (`docs/rosakis.md`).
+    Study(study::StudyArgs),
 }
 
 fn main() -> ExitCode {
@@ -60,5 +64,6 @@ fn main() -> ExitCode {
         Some(Command::Validate { scene }) => local::validate(&scene),
         Some(Command::Schema) => local::schema(),
         Some(Command::Bench(a)) => local::bench(a),
+        Some(Command::Study(a)) => study::study(a),
     }
 }
