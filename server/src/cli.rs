@@ -293,62 +293,6 @@ pub fn sweep(a: SweepArgs) -> ExitCode {
     }
 }
 
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn params_parse_numbers_strings_and_arrays() {
-        let (p, v) =
-            parse_param("cracks.0.propagation.toughness=25, 100,2.5e2").unwrap_or_default();
-        assert_eq!(p, "cracks.0.propagation.toughness");
-        assert_eq!(
-            v,
-            [
-                serde_json::json!(25),
-                serde_json::json!(100),
-                serde_json::json!(250.0)
-            ]
-        );
-        let (_, v) = parse_param("analysis=plane_strain,\"plane_stress\"").unwrap_or_default();
-        assert_eq!(
-            v,
-            [
-                serde_json::json!("plane_strain"),
-                serde_json::json!("plane_stress")
-            ]
-        );
-        let (_, v) = parse_param("cracks.0.points.1=[[0.1,0.2],[0.3,0.4]]").unwrap_or_default();
-        assert_eq!(v.len(), 2);
-        assert!(parse_param("toughness").is_err_and(|e| e.contains("path=v1,v2")));
-        assert!(parse_param("=1").is_err());
-        assert!(parse_param("a=").is_err_and(|e| e.contains("no values")));
-        assert!(parse_param("a=[1,").is_err_and(|e| e.contains("not a JSON array")));
-    }
-
-    #[test]
-    fn sweep_body_keeps_the_parameter_order() {
-        let params = vec![
-            ("z.b".to_string(), vec![serde_json::json!(1)]),
-            ("a.c".to_string(), vec![serde_json::json!("x")]),
-        ];
-        let body = sweep_body(
-            &serde_json::json!({"name": "s"}),
-            &params,
-            Some("n"),
-            2,
-            &serde_json::Map::new(),
-        );
-        let z = body.find("z.b").unwrap_or(usize::MAX);
-        let a = body.find("a.c").unwrap_or(0);
-        assert!(z < a, "{body}");
-        let v: serde_json::Value = serde_json::from_str(&body).unwrap_or_default();
-        assert_eq!(v["name"], "n");
-        assert_eq!(v["priority"], 2);
-        assert_eq!(v["parameters"]["a.c"][0], "x");
-    }
-}
-
 fn init_tracing() {
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info,tower_http=warn,sqlx=warn"));
@@ -699,5 +643,61 @@ pub fn submit(a: SubmitArgs) -> ExitCode {
             eprintln!("submit failed: {e:#}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn params_parse_numbers_strings_and_arrays() {
+        let (p, v) =
+            parse_param("cracks.0.propagation.toughness=25, 100,2.5e2").unwrap_or_default();
+        assert_eq!(p, "cracks.0.propagation.toughness");
+        assert_eq!(
+            v,
+            [
+                serde_json::json!(25),
+                serde_json::json!(100),
+                serde_json::json!(250.0)
+            ]
+        );
+        let (_, v) = parse_param("analysis=plane_strain,\"plane_stress\"").unwrap_or_default();
+        assert_eq!(
+            v,
+            [
+                serde_json::json!("plane_strain"),
+                serde_json::json!("plane_stress")
+            ]
+        );
+        let (_, v) = parse_param("cracks.0.points.1=[[0.1,0.2],[0.3,0.4]]").unwrap_or_default();
+        assert_eq!(v.len(), 2);
+        assert!(parse_param("toughness").is_err_and(|e| e.contains("path=v1,v2")));
+        assert!(parse_param("=1").is_err());
+        assert!(parse_param("a=").is_err_and(|e| e.contains("no values")));
+        assert!(parse_param("a=[1,").is_err_and(|e| e.contains("not a JSON array")));
+    }
+
+    #[test]
+    fn sweep_body_keeps_the_parameter_order() {
+        let params = vec![
+            ("z.b".to_string(), vec![serde_json::json!(1)]),
+            ("a.c".to_string(), vec![serde_json::json!("x")]),
+        ];
+        let body = sweep_body(
+            &serde_json::json!({"name": "s"}),
+            &params,
+            Some("n"),
+            2,
+            &serde_json::Map::new(),
+        );
+        let z = body.find("z.b").unwrap_or(usize::MAX);
+        let a = body.find("a.c").unwrap_or(0);
+        assert!(z < a, "{body}");
+        let v: serde_json::Value = serde_json::from_str(&body).unwrap_or_default();
+        assert_eq!(v["name"], "n");
+        assert_eq!(v["priority"], 2);
+        assert_eq!(v["parameters"]["a.c"][0], "x");
     }
 }

@@ -545,7 +545,7 @@ pub enum SweepOutcome {
     /// Accepted and not waited for (sweep id).
     Submitted(String),
     /// Accepted and every job ended: sweep id and its final state.
-    Ended(String, crate::sweep::SweepInfo),
+    Ended(String, Box<crate::sweep::SweepInfo>),
 }
 
 fn http_client() -> reqwest::Result<Client> {
@@ -648,7 +648,7 @@ pub fn sweep(cfg: &SweepConfig, out: &mut dyn Write) -> anyhow::Result<SweepOutc
                             .unwrap_or_default();
                         eprintln!("  {} {} [{}]{why}", j.id, j.status.as_str(), j.label);
                     }
-                    return Ok(SweepOutcome::Ended(id, s));
+                    return Ok(SweepOutcome::Ended(id, Box::new(s)));
                 }
             }
             None => {
