@@ -752,9 +752,17 @@ fn invalid_sweep(mut details: Vec<fracture_api::jobs::ErrorDetail>, message: Str
     ApiError::InvalidSweep { message, details }
 }
 
-/// The parameter of a sweep a field path belongs to (the longest parameter path equal to
-/// it or a prefix of it).
+/// A validator field path in dot form (`cracks[0].propagation` → `cracks.0.propagation`:
+/// deserialization errors use brackets, the checks dots).
+fn dotted(path: &str) -> String {
+    path.replace("].", ".").replace('[', ".").replace(']', "")
+}
+
+/// The parameter of a sweep a field path belongs to: the longest parameter path equal to
+/// it, below it, or above it (an unknown key a parameter added is reported at its parent).
 fn responsible<'a>(params: &'a [SweepParameter], field: &str) -> Option<(usize, &'a str)> {
+    let field = dotted(field);
+    let field = field.as_str();
     params
         .iter()
         .enumerate()

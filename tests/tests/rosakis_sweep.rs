@@ -214,3 +214,88 @@ fn rosakis_mini_toughness_sweep_through_the_service() {
     }
     eprintln!("sweep test took {:.1} s", t0.elapsed().as_secs_f64());
 }
+
+/// The sweep command refuses a bad value with exit 2 naming the parameter, the value and
+/// the field path, and stores nothing; cancelling a sweep cancels its unfinished jobs
+/// (the third job is still queued behind the two workers when the cancel arrives).
+#[test]
+fn sweep_command_errors_and_sweep_cancel_through_the_service() {
+    let scene_path =
+        std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/rosakis-shear-mini.json");
+    let dir = tempfile::tempdir().expect("tmp");
+    let s = Server::start(dir.path(), &["--workers", "2", "--worker-threads", "1"]);
+    let out = Command::new(fracture_bin())
+        .args([
+            "sweep",
+            scene_path.to_str().expect("path"),
+            "--param",
+            "cracks.0.propagation.toughness=25,-1",
+            "--server",
+            &s.url,
+        ])
+        .output()
+        .expect("run fracture sweep");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    assert!(
+        err.contains("invalid_sweep")
+            && err.contains("parameter `cracks.0.propagation.toughness` = -1")
+            && err.contains("\n  cracks.0.propagation.toughness: "),
+        "{err}"
+    );
+    let out = Command::new(fracture_bin())
+        .args([
+            "sweep",
+            scene_path.to_str().expect("path"),
+            "--param",
+            "cracks.0.propagation.tougness=25",
+            "--server",
+            &s.url,
+        ])
+        .output()
+        .expect("run fracture sweep");
+    let err = String::from_utf8_lossy(&out.stderr);
+    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    // The last segment may add a key (optional fields), so the validator catches the typo
+    // and the error still names the parameter.
+    assert!(
+        err.contains("parameter `cracks.0.propagation.tougness` = 25")
+            && err.contains("unknown field `tougness`"),
+        "{err}"
+    );
+    assert_eq!(s.get_json("/api/v1/jobs"), serde_json::json!([]));
+
+    // Cancel a fresh three-job sweep at once.
+    let scene: Value = serde_json::from_str(
+        &std::fs::read_to_string(&scene_path).expect("read rosakis-shear-mini.json"),
+    )
+    .expect("scene JSON");
+    let (code, sw) = s.post_json(
+        "/api/v1/sweeps",
+        &serde_json::json!({"scene": scene,
+            "parameters": {"cracks.0.propagation.toughness": [25, 100, 250]}}),
+    );
+    assert_eq!(code, 201, "{sw}");
+    let id = sw["id"].as_str().expect("sweep id").to_string();
+    let (code, after) = s.post_json(
+        &format!("/api/v1/sweeps/{id}/cancel"),
+        &serde_json::json!({}),
+    );
+    assert_eq!(code, 200, "{after}");
+    let t0 = Instant::now();
+    let done = loop {
+        let v = s.get_json(&format!("/api/v1/sweeps/{id}"));
+        if v["counts"]["queued"] == 0 && v["counts"]["running"] == 0 {
+            break v;
+        }
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "sweep did not end: {v}"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert_eq!(done["status"], "cancelled", "{done}");
+    assert_eq!(done["counts"]["failed"], 0, "{done}");
+    assert!(done["counts"]["cancelled"].as_u64() >= Some(1), "{done}");
+    assert_eq!(f(&done["progress"]), 1.0);
+}
