@@ -1,4 +1,5 @@
-// Dashboard entry: hash routing (#/runs, #/runs/{id}, #/compare?ids=a,b, #/submit).
+// Dashboard entry: hash routing (#/runs, #/runs/{id}, #/compare?ids=a,b, #/submit,
+// #/sweeps, #/sweeps/{id}).
 // Each view is a function (main element, route params) that returns a cleanup function.
 
 import { getToken, setToken } from './js/api.js';
@@ -7,6 +8,7 @@ import { runsView } from './js/views/runs.js';
 import { runView } from './js/views/run.js';
 import { compareView } from './js/views/compare.js';
 import { submitView } from './js/views/submit.js';
+import { sweepsView, sweepView } from './js/views/sweep.js';
 
 const main = document.getElementById('main');
 let cleanup = null;
@@ -18,6 +20,8 @@ function route() {
   const parts = path.split('/').filter(Boolean);
   let view, params = {}, nav = parts[0] || 'runs';
   if (parts[0] === 'runs' && parts[1]) { view = runView; params = { id: decodeURIComponent(parts[1]) }; }
+  else if (parts[0] === 'sweeps' && parts[1]) { view = sweepView; params = { id: decodeURIComponent(parts[1]) }; nav = 'sweeps'; }
+  else if (parts[0] === 'sweeps') view = sweepsView;
   else if (parts[0] === 'compare') view = compareView;
   else if (parts[0] === 'submit') view = submitView;
   else { view = runsView; nav = 'runs'; }

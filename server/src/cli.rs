@@ -1,4 +1,4 @@
-//! Service commands: `serve`, `worker`, `submit`.
+//! Service commands: `serve`, `worker`, `submit`, `sweep`.
 
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
@@ -127,6 +127,170 @@ pub struct SubmitArgs {
     /// Show progress and exit with the job's outcome (0 completed, 3 failed, 4 cancelled).
     #[arg(long)]
     pub wait: bool,
+}
+
+/// Arguments of `fracture sweep`.
+#[derive(clap::Args, Debug)]
+pub struct SweepArgs {
+    /// Base scene JSON file (a scene, or `{"scene": …}`).
+    pub scene: PathBuf,
+    /// A swept parameter, `json.path=v1,v2,…` (repeatable; one job per combination).
+    /// Numeric path segments index arrays; each value is read as JSON (a number, `true`,
+    /// `"text"`), or as a string if it is not JSON; `path=[…]` gives the values as a JSON
+    /// array (for values with commas).
+    #[arg(long = "param", required = true)]
+    pub params: Vec<String>,
+    /// URL of the server.
+    #[arg(long, env = "FRACTURE_SERVER", default_value = "http://127.0.0.1:8080")]
+    pub server: String,
+    /// API token.
+    #[arg(long, env = "FRACTURE_TOKEN", hide_env_values = true)]
+    pub token: Option<String>,
+    /// Name of the sweep (default: the scene's name).
+    #[arg(long)]
+    pub name: Option<String>,
+    /// Priority of its jobs (higher runs first).
+    #[arg(long)]
+    pub priority: Option<i64>,
+    /// Label `key=value` for every job (repeatable).
+    #[arg(long = "label")]
+    pub labels: Vec<String>,
+    /// Show the progress of all jobs and exit with the outcome (0 all completed, 3 some
+    /// failed, 4 some cancelled and none failed).
+    #[arg(long)]
+    pub wait: bool,
+}
+
+/// Parse one `--param path=v1,v2` into the path and its values.
+pub fn parse_param(arg: &str) -> Result<(String, Vec<serde_json::Value>), String> {
+    let (path, values) = arg
+        .split_once('=')
+        .ok_or_else(|| format!("--param must be path=v1,v2,…, got `{arg}`"))?;
+    let path = path.trim();
+    if path.is_empty() {
+        return Err(format!("--param `{arg}`: the path is empty"));
+    }
+    let values = values.trim();
+    let list: Vec<serde_json::Value> = if values.starts_with('[') {
+        serde_json::from_str(values)
+            .map_err(|e| format!("--param {path}: `{values}` is not a JSON array: {e}"))?
+    } else {
+        values
+            .split(',')
+            .map(str::trim)
+            .filter(|v| !v.is_empty())
+            .map(|v| {
+                serde_json::from_str(v).unwrap_or_else(|_| serde_json::Value::String(v.into()))
+            })
+            .collect()
+    };
+    if list.is_empty() {
+        return Err(format!("--param {path}: no values"));
+    }
+    Ok((path.to_string(), list))
+}
+
+/// The body of `POST /api/v1/sweeps` as text: the parameters in the order given (a
+/// `serde_json::Value` would sort them).
+pub fn sweep_body(
+    scene: &serde_json::Value,
+    params: &[(String, Vec<serde_json::Value>)],
+    name: Option<&str>,
+    priority: i64,
+    labels: &serde_json::Map<String, serde_json::Value>,
+) -> String {
+    let params: Vec<String> = params
+        .iter()
+        .map(|(p, v)| {
+            format!(
+                "{}: {}",
+                serde_json::Value::String(p.clone()),
+                serde_json::Value::Array(v.clone())
+            )
+        })
+        .collect();
+    let mut body = format!(
+        "{{\"scene\": {scene}, \"parameters\": {{{}}}, \"priority\": {priority}, \"labels\": {}",
+        params.join(", "),
+        serde_json::Value::Object(labels.clone())
+    );
+    if let Some(n) = name {
+        body.push_str(&format!(
+            ", \"name\": {}",
+            serde_json::Value::String(n.into())
+        ));
+    }
+    body.push('}');
+    body
+}
+
+/// `fracture sweep`.
+pub fn sweep(a: SweepArgs) -> ExitCode {
+    let text = match std::fs::read_to_string(&a.scene) {
+        Ok(t) => t,
+        Err(e) => {
+            eprintln!("cannot read {}: {e}", a.scene.display());
+            return ExitCode::from(2);
+        }
+    };
+    let doc: serde_json::Value = match serde_json::from_str(&text) {
+        Ok(v) => v,
+        Err(e) => {
+            eprintln!("{} is not valid JSON: {e}", a.scene.display());
+            return ExitCode::from(2);
+        }
+    };
+    let scene = match doc.get("scene") {
+        Some(s) if doc.get("grid").is_none() => s.clone(),
+        _ => doc,
+    };
+    let mut params = Vec::new();
+    for p in &a.params {
+        match parse_param(p) {
+            Ok(p) => params.push(p),
+            Err(e) => {
+                eprintln!("{e}");
+                return ExitCode::from(2);
+            }
+        }
+    }
+    let mut labels = serde_json::Map::new();
+    for l in &a.labels {
+        let Some((k, v)) = l.split_once('=') else {
+            eprintln!("--label must be key=value, got `{l}`");
+            return ExitCode::from(2);
+        };
+        labels.insert(k.to_string(), serde_json::Value::String(v.to_string()));
+    }
+    let cfg = client::SweepConfig {
+        server: a.server,
+        token: a.token,
+        body: sweep_body(
+            &scene,
+            &params,
+            a.name.as_deref(),
+            a.priority.unwrap_or(0),
+            &labels,
+        ),
+        wait: a.wait,
+    };
+    let mut out = std::io::stdout();
+    match client::sweep(&cfg, &mut out) {
+        Ok(client::SweepOutcome::Rejected(_, msg)) => {
+            eprintln!("{msg}");
+            ExitCode::from(2)
+        }
+        Ok(client::SweepOutcome::Submitted(_)) => ExitCode::SUCCESS,
+        Ok(client::SweepOutcome::Ended(_, s)) => match s.status.as_str() {
+            "completed" => ExitCode::SUCCESS,
+            "cancelled" => ExitCode::from(4),
+            _ => ExitCode::from(3),
+        },
+        Err(e) => {
+            eprintln!("sweep failed: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
 }
 
 fn init_tracing() {
@@ -479,5 +643,61 @@ pub fn submit(a: SubmitArgs) -> ExitCode {
             eprintln!("submit failed: {e:#}");
             ExitCode::FAILURE
         }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn params_parse_numbers_strings_and_arrays() {
+        let (p, v) =
+            parse_param("cracks.0.propagation.toughness=25, 100,2.5e2").unwrap_or_default();
+        assert_eq!(p, "cracks.0.propagation.toughness");
+        assert_eq!(
+            v,
+            [
+                serde_json::json!(25),
+                serde_json::json!(100),
+                serde_json::json!(250.0)
+            ]
+        );
+        let (_, v) = parse_param("analysis=plane_strain,\"plane_stress\"").unwrap_or_default();
+        assert_eq!(
+            v,
+            [
+                serde_json::json!("plane_strain"),
+                serde_json::json!("plane_stress")
+            ]
+        );
+        let (_, v) = parse_param("cracks.0.points.1=[[0.1,0.2],[0.3,0.4]]").unwrap_or_default();
+        assert_eq!(v.len(), 2);
+        assert!(parse_param("toughness").is_err_and(|e| e.contains("path=v1,v2")));
+        assert!(parse_param("=1").is_err());
+        assert!(parse_param("a=").is_err_and(|e| e.contains("no values")));
+        assert!(parse_param("a=[1,").is_err_and(|e| e.contains("not a JSON array")));
+    }
+
+    #[test]
+    fn sweep_body_keeps_the_parameter_order() {
+        let params = vec![
+            ("z.b".to_string(), vec![serde_json::json!(1)]),
+            ("a.c".to_string(), vec![serde_json::json!("x")]),
+        ];
+        let body = sweep_body(
+            &serde_json::json!({"name": "s"}),
+            &params,
+            Some("n"),
+            2,
+            &serde_json::Map::new(),
+        );
+        let z = body.find("z.b").unwrap_or(usize::MAX);
+        let a = body.find("a.c").unwrap_or(0);
+        assert!(z < a, "{body}");
+        let v: serde_json::Value = serde_json::from_str(&body).unwrap_or_default();
+        assert_eq!(v["name"], "n");
+        assert_eq!(v["priority"], 2);
+        assert_eq!(v["parameters"]["a.c"][0], "x");
     }
 }

@@ -1,6 +1,6 @@
 //! HTTP clients of the service: the worker process (claims jobs, runs them with
 //! [`fracture_worker::run_scene`] and streams results through an HTTP [`RunSink`]) and
-//! `fracture submit`.
+//! `fracture submit` and `fracture sweep`.
 
 use std::io::{BufRead, BufReader, Write};
 use std::sync::Arc;
@@ -434,10 +434,7 @@ fn show_error(status: u16, body: &str) -> String {
 /// Submit a scene and, with `wait`, follow its events (falling back to polling) until it ends.
 pub fn submit(cfg: &SubmitConfig, out: &mut dyn Write) -> anyhow::Result<SubmitOutcome> {
     let base = cfg.server.trim_end_matches('/').to_string();
-    let http = Client::builder()
-        .connect_timeout(Duration::from_secs(5))
-        .timeout(None::<Duration>)
-        .build()?;
+    let http = http_client()?;
     let mut req = http.post(format!("{base}/api/v1/jobs")).json(&cfg.body);
     if let Some(t) = &cfg.token {
         req = req.bearer_auth(t);
@@ -519,6 +516,147 @@ pub fn submit(cfg: &SubmitConfig, out: &mut dyn Write) -> anyhow::Result<SubmitO
             && j.status.is_terminal()
         {
             return Ok(SubmitOutcome::Ended(id, j.status, j.message));
+        }
+        std::thread::sleep(Duration::from_secs(1));
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// sweep
+
+/// What `fracture sweep` does.
+#[derive(Debug, Clone)]
+pub struct SweepConfig {
+    /// Base URL of the server.
+    pub server: String,
+    /// API token, if the server needs one.
+    pub token: Option<String>,
+    /// The request body as JSON text (text, so the parameters keep their order).
+    pub body: String,
+    /// Follow the jobs until all have ended.
+    pub wait: bool,
+}
+
+/// Outcome of a sweep submission.
+#[derive(Debug, Clone)]
+pub enum SweepOutcome {
+    /// Refused (status and the error body, shown).
+    Rejected(u16, String),
+    /// Accepted and not waited for (sweep id).
+    Submitted(String),
+    /// Accepted and every job ended: sweep id and its final state.
+    Ended(String, Box<crate::sweep::SweepInfo>),
+}
+
+fn http_client() -> reqwest::Result<Client> {
+    Client::builder()
+        .connect_timeout(Duration::from_secs(5))
+        .timeout(None::<Duration>)
+        .build()
+}
+
+/// One line of a sweep's state: `3 jobs: 1 completed, 1 running, 1 queued (45%)`.
+pub fn sweep_line(s: &crate::sweep::SweepInfo) -> String {
+    let parts: Vec<String> = ["completed", "running", "queued", "failed", "cancelled"]
+        .iter()
+        .filter_map(|k| {
+            let n = s.counts.get(*k).copied().unwrap_or(0);
+            (n > 0).then(|| format!("{n} {k}"))
+        })
+        .collect();
+    format!(
+        "{}: {} jobs: {} ({:.0}%)",
+        s.id,
+        s.total,
+        parts.join(", "),
+        100.0 * s.progress
+    )
+}
+
+/// Create a sweep (`POST /api/v1/sweeps`), print its id and one line per job (`id label`)
+/// and, with `wait`, poll it until every job has ended, showing progress on stderr.
+pub fn sweep(cfg: &SweepConfig, out: &mut dyn Write) -> anyhow::Result<SweepOutcome> {
+    use crate::sweep::SweepInfo;
+    let base = cfg.server.trim_end_matches('/').to_string();
+    let http = http_client()?;
+    let mut req = http
+        .post(format!("{base}/api/v1/sweeps"))
+        .header(reqwest::header::CONTENT_TYPE, "application/json")
+        .body(cfg.body.clone());
+    if let Some(t) = &cfg.token {
+        req = req.bearer_auth(t);
+    }
+    let r = req.timeout(Duration::from_secs(60)).send()?;
+    let status = r.status();
+    let text = r.text()?;
+    if status != StatusCode::CREATED {
+        return Ok(SweepOutcome::Rejected(
+            status.as_u16(),
+            show_error(status.as_u16(), &text),
+        ));
+    }
+    let sweep: SweepInfo = serde_json::from_str(&text)?;
+    writeln!(out, "{}", sweep.id)?;
+    for j in sweep.jobs.iter().flatten() {
+        writeln!(out, "{} {}", j.id, j.label)?;
+    }
+    if !cfg.wait {
+        return Ok(SweepOutcome::Submitted(sweep.id));
+    }
+    let id = sweep.id;
+    let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let mut last_line = String::new();
+    let mut last_print = Instant::now() - Duration::from_secs(10);
+    let mut failures = 0u32;
+    loop {
+        let r = http
+            .get(format!("{base}/api/v1/sweeps/{id}"))
+            .timeout(Duration::from_secs(30))
+            .send();
+        let info = match r {
+            Ok(r) if r.status().is_success() => r.json::<SweepInfo>().ok(),
+            Ok(r) if r.status() == StatusCode::NOT_FOUND => {
+                anyhow::bail!("sweep {id} disappeared from the server (deleted?)")
+            }
+            _ => None,
+        };
+        match info {
+            Some(s) => {
+                failures = 0;
+                let line = sweep_line(&s);
+                let done = s.total > 0
+                    && s.counts.get("queued").copied().unwrap_or(0) == 0
+                    && s.counts.get("running").copied().unwrap_or(0) == 0;
+                if tty {
+                    eprint!("\r{line}   ");
+                } else if line != last_line
+                    && (done || last_print.elapsed() > Duration::from_secs(2))
+                {
+                    eprintln!("{line}");
+                    last_print = Instant::now();
+                }
+                last_line = line;
+                if done {
+                    if tty {
+                        eprintln!();
+                    }
+                    for j in s.jobs.iter().flatten() {
+                        let why = j
+                            .message
+                            .as_deref()
+                            .map(|m| format!(": {m}"))
+                            .unwrap_or_default();
+                        eprintln!("  {} {} [{}]{why}", j.id, j.status.as_str(), j.label);
+                    }
+                    return Ok(SweepOutcome::Ended(id, Box::new(s)));
+                }
+            }
+            None => {
+                failures += 1;
+                if failures > 120 {
+                    anyhow::bail!("the server has not answered for two minutes");
+                }
+            }
         }
         std::thread::sleep(Duration::from_secs(1));
     }

@@ -24,6 +24,8 @@ enum Command {
     Worker(fracture_server::cli::WorkerArgs),
     /// Submit a scene to a server (optionally wait for the outcome).
     Submit(fracture_server::cli::SubmitArgs),
+    /// Submit a parameter sweep: one job per combination of `--param` values.
+    Sweep(fracture_server::cli::SweepArgs),
     /// Run one scene locally, without a server, writing the run directory.
     Run {
         /// Scene JSON file.
@@ -56,6 +58,7 @@ fn main() -> ExitCode {
         Some(Command::Serve(a)) => fracture_server::cli::serve(a),
         Some(Command::Worker(a)) => fracture_server::cli::worker(a),
         Some(Command::Submit(a)) => fracture_server::cli::submit(a),
+        Some(Command::Sweep(a)) => fracture_server::cli::sweep(a),
         Some(Command::Run {
             scene,
             out,

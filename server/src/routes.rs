@@ -752,9 +752,17 @@ fn invalid_sweep(mut details: Vec<fracture_api::jobs::ErrorDetail>, message: Str
     ApiError::InvalidSweep { message, details }
 }
 
-/// The parameter of a sweep a field path belongs to (the longest parameter path equal to
-/// it or a prefix of it).
+/// A validator field path in dot form (`cracks[0].propagation` → `cracks.0.propagation`:
+/// deserialization errors use brackets, the checks dots).
+fn dotted(path: &str) -> String {
+    path.replace("].", ".").replace('[', ".").replace(']', "")
+}
+
+/// The parameter of a sweep a field path belongs to: the longest parameter path equal to
+/// it, below it, or above it (an unknown key a parameter added is reported at its parent).
 fn responsible<'a>(params: &'a [SweepParameter], field: &str) -> Option<(usize, &'a str)> {
+    let field = dotted(field);
+    let field = field.as_str();
     params
         .iter()
         .enumerate()
@@ -765,6 +773,103 @@ fn responsible<'a>(params: &'a [SweepParameter], field: &str) -> Option<(usize, 
         })
         .max_by_key(|(_, p)| p.path.len())
         .map(|(i, p)| (i, p.path.as_str()))
+}
+
+/// Every job of a sweep: each combination built from the base scene and validated (scene
+/// validation and this server's limits). Any invalid combination refuses the whole sweep
+/// with one detail per problem. CPU-bound (validation counts particles): run it off the
+/// async threads.
+fn build_sweep_jobs(
+    scene: &serde_json::Value,
+    params: &[SweepParameter],
+    limits: &crate::config::Limits,
+    sweep_id: &str,
+    base_name: &str,
+    priority: i64,
+    labels: &BTreeMap<String, String>,
+) -> Result<Vec<NewSweepJob>, ApiError> {
+    use fracture_api::jobs::ErrorDetail;
+    let names = sweep::short_names(params);
+    let mut jobs = Vec::new();
+    let mut problems: Vec<ErrorDetail> = Vec::new();
+    let mut first_problem: Option<String> = None;
+    for combo in sweep::combinations(params) {
+        let label = sweep::label(&names, params, &combo);
+        let mut doc = scene.clone();
+        let mut values = serde_json::Map::new();
+        for (p, &i) in params.iter().zip(&combo) {
+            let v = p.values.get(i).cloned().unwrap_or(serde_json::Value::Null);
+            values.insert(p.path.clone(), v.clone());
+            sweep::set_path(&mut doc, &p.path, v)
+                .map_err(|e| ApiError::BadRequest(e.to_string()))?;
+        }
+        let checked = validate::scene_from_value(doc)
+            .map_err(ApiError::from)
+            .and_then(|scene| {
+                validate::validate(&scene)
+                    .map_err(ApiError::from)
+                    .and_then(|size| limits.check(&scene, &size))
+                    .map(|_| scene)
+            });
+        let scene = match checked {
+            Ok(scene) => scene,
+            Err(e) => {
+                let details = match e {
+                    ApiError::InvalidScene(d) | ApiError::LimitExceeded { details: d, .. } => d,
+                    other => return Err(other),
+                };
+                for d in details {
+                    let blame = match responsible(params, &d.path) {
+                        Some((i, path)) => format!(
+                            "parameter `{path}` = {}",
+                            params[i]
+                                .values
+                                .get(combo[i])
+                                .map(|v| v.to_string())
+                                .unwrap_or_default()
+                        ),
+                        None => format!("combination `{label}`"),
+                    };
+                    let message = format!("with {blame} ({label}): {}", d.message);
+                    if first_problem.is_none() {
+                        first_problem = Some(format!(
+                            "the sweep's combination `{label}` is not a valid scene: {blame}: {}: {}",
+                            d.path, d.message
+                        ));
+                    }
+                    problems.push(ErrorDetail {
+                        path: d.path,
+                        message,
+                    });
+                }
+                continue;
+            }
+        };
+        let mut labels = labels.clone();
+        labels.insert("sweep".into(), sweep_id.to_string());
+        for (n, (p, &i)) in names.iter().zip(params.iter().zip(&combo)) {
+            labels.insert(
+                n.clone(),
+                p.values.get(i).map(sweep::value_text).unwrap_or_default(),
+            );
+        }
+        jobs.push(NewSweepJob {
+            job: NewJob {
+                id: new_job_id(),
+                name: format!("{base_name} ({label})"),
+                scene: scene.canonical_json(),
+                end_time: scene.time.end,
+                priority,
+                labels,
+            },
+            label,
+            values: serde_json::Value::Object(values).to_string(),
+        });
+    }
+    if let Some(message) = first_problem {
+        return Err(invalid_sweep(problems, message));
+    }
+    Ok(jobs)
 }
 
 /// Create a sweep: one job per combination of the parameter values (every combination is
@@ -866,7 +971,6 @@ async fn create_sweep(
         ));
     }
     // Build and validate every combination before storing anything.
-    let names = sweep::short_names(&params);
     let sweep_id = new_job_id();
     let base_name = req
         .scene
@@ -874,80 +978,19 @@ async fn create_sweep(
         .and_then(|n| n.as_str())
         .unwrap_or("untitled")
         .to_string();
-    let mut jobs = Vec::new();
-    let mut problems: Vec<ErrorDetail> = Vec::new();
-    let mut first_problem: Option<String> = None;
-    for combo in sweep::combinations(&params) {
-        let label = sweep::label(&names, &params, &combo);
-        let mut doc = req.scene.clone();
-        let mut values = serde_json::Map::new();
-        for (p, &i) in params.iter().zip(&combo) {
-            let v = p.values.get(i).cloned().unwrap_or(serde_json::Value::Null);
-            values.insert(p.path.clone(), v.clone());
-            sweep::set_path(&mut doc, &p.path, v)
-                .map_err(|e| ApiError::BadRequest(e.to_string()))?;
-        }
-        let checked = validate::scene_from_value(doc)
-            .map_err(ApiError::from)
-            .and_then(|scene| check_scene(&st, &scene).map(|_| scene));
-        let scene = match checked {
-            Ok(scene) => scene,
-            Err(e) => {
-                let details = match e {
-                    ApiError::InvalidScene(d) | ApiError::LimitExceeded { details: d, .. } => d,
-                    other => return Err(other),
-                };
-                for d in details {
-                    let blame = match responsible(&params, &d.path) {
-                        Some((i, path)) => format!(
-                            "parameter `{path}` = {}",
-                            params[i]
-                                .values
-                                .get(combo[i])
-                                .map(|v| v.to_string())
-                                .unwrap_or_default()
-                        ),
-                        None => format!("combination `{label}`"),
-                    };
-                    let message = format!("with {blame} ({label}): {}", d.message);
-                    if first_problem.is_none() {
-                        first_problem = Some(format!(
-                            "the sweep's combination `{label}` is not a valid scene: {blame}: {}: {}",
-                            d.path, d.message
-                        ));
-                    }
-                    problems.push(ErrorDetail {
-                        path: d.path,
-                        message,
-                    });
-                }
-                continue;
-            }
-        };
-        let mut labels = req.labels.clone();
-        labels.insert("sweep".into(), sweep_id.clone());
-        for (n, (p, &i)) in names.iter().zip(params.iter().zip(&combo)) {
-            labels.insert(
-                n.clone(),
-                p.values.get(i).map(sweep::value_text).unwrap_or_default(),
-            );
-        }
-        jobs.push(NewSweepJob {
-            job: NewJob {
-                id: new_job_id(),
-                name: format!("{base_name} ({label})"),
-                scene: scene.canonical_json(),
-                end_time: scene.time.end,
-                priority: req.priority,
-                labels,
-            },
-            label,
-            values: serde_json::Value::Object(values).to_string(),
-        });
-    }
-    if let Some(message) = first_problem {
-        return Err(invalid_sweep(problems, message));
-    }
+    let jobs = {
+        let (scene, params, limits) = (req.scene.clone(), params.clone(), st.cfg.limits.clone());
+        let (sweep_id, base_name, labels) =
+            (sweep_id.clone(), base_name.clone(), req.labels.clone());
+        let priority = req.priority;
+        tokio::task::spawn_blocking(move || {
+            build_sweep_jobs(
+                &scene, &params, &limits, &sweep_id, &base_name, priority, &labels,
+            )
+        })
+        .await
+        .map_err(ApiError::internal)??
+    };
     let new = NewSweep {
         id: sweep_id,
         name: req

@@ -198,6 +198,16 @@ async fn bad_paths_values_and_sizes_are_refused_before_any_job_is_queued() {
             .contains("parameter `time.end` = \"soon\""),
         "{v}"
     );
+    // A misspelt last segment adds a key; the validator refuses it at its parent, and the
+    // error still names the parameter.
+    let body = json!({"scene": scene(), "parameters": {"time.cfll": [0.5]}});
+    let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
+    let m = v["details"][0]["message"].as_str().unwrap();
+    assert!(
+        m.contains("parameter `time.cfll` = 0.5") && m.contains("unknown field `cfll`"),
+        "{v}"
+    );
     // Too many combinations (limit 6 here).
     let body = json!({"scene": scene(), "parameters": {
         "time.cfl": [0.1, 0.2, 0.3],

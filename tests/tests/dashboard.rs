@@ -774,4 +774,86 @@ async fn run_steps(c: &Client, base: &str) {
         .expect("look for the deleted run");
     assert_eq!(gone, json!(true), "the deleted run is still listed");
     assert_no_console_errors(c, "cancel and delete").await;
+
+    // 6. a toughness sweep: the sweeps list links to its page, which overlays the runs'
+    //    speed curves (legend = parameter labels, reference speeds) and goes live to
+    //    `completed`; a run of the sweep links back to it
+    let sweep_id = c
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             fetch('/api/v1/sweeps', {method: 'POST', headers: {'Content-Type': 'application/json'}, \
+               body: JSON.stringify({scene: arguments[0], name: 'e2e-sweep', \
+                 parameters: {'cracks.0.propagation.toughness': [5, 20]}})}) \
+             .then(r => r.json()).then(s => done(s.id || JSON.stringify(s))).catch(e => done('ERR ' + e));",
+            vec![small_scene("e2e-sweep", 5.0, 0.001)],
+        )
+        .await
+        .expect("create a sweep");
+    let sweep_id = sweep_id.as_str().unwrap_or_default().to_string();
+    assert!(
+        sweep_id.len() > 8 && !sweep_id.starts_with("ERR") && !sweep_id.starts_with('{'),
+        "sweep: {sweep_id}"
+    );
+    click(c, "a[data-nav=sweeps]").await;
+    wait_js(
+        c,
+        "the sweep in the sweeps list",
+        &format!("return !!document.querySelector('tr[data-id=\"{sweep_id}\"] a.sweep-link');"),
+        long,
+    )
+    .await;
+    click(c, &format!("tr[data-id=\"{sweep_id}\"] a.sweep-link")).await;
+    wait_js(
+        c,
+        "the sweep page completed",
+        "return document.querySelector('.badge-host .badge')?.textContent === 'completed' && document.querySelectorAll('tr[data-status=completed]').length === 2;",
+        RUN_TIMEOUT,
+    )
+    .await;
+    wait_js(
+        c,
+        "two speed curves on the sweep page",
+        "return document.querySelectorAll('#sweep-speed .series path').length >= 2 && document.querySelectorAll('#sweep-speed .legend-item').length >= 2;",
+        long,
+    )
+    .await;
+    let legend = c
+        .execute("return [...document.querySelectorAll('#sweep-speed .legend-item')].map(b => b.textContent).join('|');", vec![])
+        .await
+        .expect("sweep legend");
+    let legend = legend.as_str().unwrap_or_default().to_string();
+    assert!(
+        legend.contains("toughness=5") && legend.contains("toughness=20"),
+        "sweep legend: {legend}"
+    );
+    let refs = c
+        .execute("return [...document.querySelectorAll('#sweep-speed .ref-label text')].map(t => t.textContent).join('|');", vec![])
+        .await
+        .expect("sweep reference labels");
+    for label in ["c_R", "c_S", "√2·c_S", "c_L"] {
+        assert!(
+            refs.as_str().unwrap_or_default().contains(label),
+            "sweep speed plot lacks {label}: {refs}"
+        );
+    }
+    assert_no_console_errors(c, "sweep page").await;
+    screenshot(c, "sweep.png", 1280, 1100).await;
+    c.set_window_size(1280, 900).await.expect("resize window");
+    click(c, "tr[data-status=completed] a.run-link").await;
+    wait_js(
+        c,
+        "the run page links back to its sweep",
+        "return !!document.querySelector('#run-sweep-link');",
+        long,
+    )
+    .await;
+    click(c, "#run-sweep-link").await;
+    wait_js(
+        c,
+        "back on the sweep page",
+        &format!("return location.hash === '#/sweeps/{sweep_id}' && !!document.querySelector('#sweep-speed');"),
+        long,
+    )
+    .await;
+    assert_no_console_errors(c, "sweep navigation").await;
 }

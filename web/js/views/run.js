@@ -153,6 +153,7 @@ export function runView(main, { id }) {
     renderProgress();
     replace(metaHost,
       meta('Id', h('span', { class: 'mono' }, job.id)),
+      job.sweep_id ? meta('Sweep', h('a', { href: `#/sweeps/${encodeURIComponent(job.sweep_id)}`, id: 'run-sweep-link' }, 'part of a sweep: compare its runs')) : null,
       meta('Labels', labelChips(job.labels)),
       meta('Created', timeEl(job.created_at)),
       meta('Started', timeEl(job.started_at)),

@@ -1,0 +1,82 @@
+// Pure helpers of the sweep pages (no DOM): crack-tip histories gathered per job and tip as
+// rows arrive (polling with ?since= may repeat rows), sweep summaries and series names.
+
+/** The states of a job, in the order a sweep summary lists them. */
+export const SWEEP_STATES = ['completed', 'running', 'queued', 'failed', 'cancelled'];
+
+/** Whether a sweep (or a job) still has work queued or running. */
+export function isActive(s) {
+  if (!s) return false;
+  if (s.status === 'queued' || s.status === 'running') return true;
+  const c = s.counts || {};
+  return (c.queued || 0) + (c.running || 0) > 0;
+}
+
+/** `3 jobs: 2 completed, 1 running` from a sweep's `total` and `counts`. */
+export function countsText(s) {
+  const c = (s && s.counts) || {};
+  const parts = SWEEP_STATES.filter((k) => c[k] > 0).map((k) => `${c[k]} ${k}`);
+  const n = (s && s.total) || 0;
+  return `${n} job${n === 1 ? '' : 's'}${parts.length ? `: ${parts.join(', ')}` : ''}`;
+}
+
+/** `toughness: 25, 100, 250` lines of a sweep's parameters (short name = last segments). */
+export function parameterText(parameters) {
+  return (parameters || []).map((p) => `${p.path}: ${(p.values || []).map((v) => (typeof v === 'string' ? v : JSON.stringify(v))).join(', ')}`);
+}
+
+/**
+ * Crack-tip histories of one job, per tip ("crack/tip" → {t: [], v: []}), fed with rows
+ * as they arrive. Rows at or before a tip's last time are ignored, so overlapping polls do
+ * not double points.
+ */
+export class TipHistory {
+  constructor() {
+    this.tips = new Map();
+    this.multiCrack = false;
+    this.maxSpeed = 0;
+  }
+
+  /** Add rows; returns how many were new. */
+  add(rows) {
+    let n = 0;
+    for (const r of rows || []) {
+      const t = Number(r && r.time);
+      if (!Number.isFinite(t)) continue;
+      const key = `${r.crack}/${r.tip}`;
+      let s = this.tips.get(key);
+      if (!s) {
+        s = { crack: Number(r.crack), tip: Number(r.tip), t: [], v: [] };
+        this.tips.set(key, s);
+      }
+      if (s.t.length && t <= s.t[s.t.length - 1]) continue;
+      const v = r.speed === null || r.speed === undefined ? NaN : Number(r.speed);
+      s.t.push(t);
+      s.v.push(v);
+      if (Number(r.crack) > 0) this.multiCrack = true;
+      if (Number.isFinite(v)) this.maxSpeed = Math.max(this.maxSpeed, Math.abs(v));
+      n++;
+    }
+    return n;
+  }
+
+  /** The `since` for the next poll: the earliest of the tips' last times (undefined: all). */
+  since() {
+    if (!this.tips.size) return undefined;
+    return Math.min(...[...this.tips.values()].map((s) => s.t[s.t.length - 1]));
+  }
+
+  /** Number of samples over all tips. */
+  get size() {
+    let n = 0;
+    for (const s of this.tips.values()) n += s.t.length;
+    return n;
+  }
+}
+
+/** Legend name of a job's tip series: the job's label, plus the tip when it has several. */
+export function seriesName(label, tip, tipCount, multiCrack) {
+  if (tipCount <= 1) return label;
+  const end = tip.tip === 0 ? 'start tip' : 'end tip';
+  return `${label}, ${multiCrack ? `crack ${tip.crack} ${end}` : end}`;
+}
