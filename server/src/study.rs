@@ -32,9 +32,12 @@ pub struct StudyArgs {
     /// The base scene of the sweeps.
     #[arg(long, default_value = "scenes/rosakis-shear-coarse.json")]
     pub scene: PathBuf,
-    /// Also run the toughness sweep on this (finer) scene, e.g. scenes/rosakis-shear.json.
+    /// Also run the four sweeps on this (finer) scene, e.g. scenes/rosakis-shear.json.
     #[arg(long)]
     pub fine: Option<PathBuf>,
+    /// The reduced scene of the acceptance test, swept over J_Ic at its own end time.
+    #[arg(long, default_value = "scenes/rosakis-shear-mini.json")]
+    pub mini: PathBuf,
     /// Folder for `rosakis.md`; figures and tables go to its `rosakis/` subfolder.
     #[arg(long, default_value = "docs")]
     pub out: PathBuf,
@@ -116,6 +119,8 @@ struct Sweep {
     id: &'static str,
     title: String,
     scene: PathBuf,
+    /// Simulated time, if not the study's `--end` (the reduced scene keeps its own).
+    end: Option<f64>,
     runs: Vec<Variant>,
     /// Legend of each run.
     legend: fn(&Variant) -> String,
@@ -304,6 +309,7 @@ fn sweeps(a: &StudyArgs) -> Vec<Sweep> {
             id: "velocity",
             title: "Impact velocity (J_Ic = 25 J/m², frictionless)".into(),
             scene: a.scene.clone(),
+            end: None,
             runs: [10.0, 15.0, 20.0, 25.0, 30.0]
                 .iter()
                 .map(|&v| base(v, 25.0, 0.0))
@@ -314,6 +320,7 @@ fn sweeps(a: &StudyArgs) -> Vec<Sweep> {
             id: "toughness",
             title: "Toughness (25 m/s, frictionless)".into(),
             scene: a.scene.clone(),
+            end: None,
             runs: [25.0, 100.0, 250.0]
                 .iter()
                 .map(|&j| base(25.0, j, 0.0))
@@ -324,6 +331,7 @@ fn sweeps(a: &StudyArgs) -> Vec<Sweep> {
             id: "friction",
             title: "Friction (J_Ic = 250 J/m², 25 m/s)".into(),
             scene: a.scene.clone(),
+            end: None,
             runs: [0.0, 0.1, 0.3]
                 .iter()
                 .map(|&mu| base(25.0, 250.0, mu))
@@ -334,6 +342,7 @@ fn sweeps(a: &StudyArgs) -> Vec<Sweep> {
             id: "friction-slow",
             title: "Friction at a low impact speed (J_Ic = 250 J/m², 15 m/s)".into(),
             scene: a.scene.clone(),
+            end: None,
             runs: [0.0, 0.1, 0.3]
                 .iter()
                 .map(|&mu| base(15.0, 250.0, mu))
@@ -341,13 +350,28 @@ fn sweeps(a: &StudyArgs) -> Vec<Sweep> {
             legend: |r| format!("μ = {}", r.mu),
         },
     ];
+    // The acceptance test's reduced scene (tests/tests/rosakis_sweep.rs), at its own 30 µs.
+    out.push(Sweep {
+        id: "toughness-mini",
+        title: "Toughness on the reduced scene of the acceptance test (25 m/s, frictionless, 30 µs)"
+            .into(),
+        scene: a.mini.clone(),
+        end: Some(3.0e-5),
+        runs: [25.0, 100.0, 250.0]
+            .iter()
+            .map(|&j| base(25.0, j, 0.0))
+            .collect(),
+        legend: |r| format!("J_Ic = {} J/m²", r.j_ic),
+    });
     if let Some(fine) = &a.fine {
         let fine_sweeps: Vec<Sweep> = out
             .iter()
+            .filter(|sw| sw.end.is_none())
             .map(|sw| Sweep {
                 id: fine_id(sw.id),
                 title: format!("{}, 0.5 mm cells", sw.title),
                 scene: fine.clone(),
+                end: None,
                 runs: sw.runs.clone(),
                 legend: sw.legend,
             })
@@ -377,7 +401,7 @@ fn rosakis(a: &StudyArgs) -> anyhow::Result<()> {
                 println!("[{done}/{total}] {} {}: same run as before", sw.id, v.label());
                 continue;
             }
-            let scene = variant_scene(base, v, a.end)
+            let scene = variant_scene(base, v, sw.end.unwrap_or(a.end))
                 .with_context(|| format!("sweep {} run {}", sw.id, v.label()))?;
             let m = run_one(&scene, a.threads);
             println!(
@@ -488,7 +512,8 @@ impl Report<'_> {
                     series.push(((sw.legend)(v), pts));
                 }
             }
-            let svg = speed_plot(&sw.title, &series, &self.speeds, self.a.end * 1e6);
+            let end = sw.end.unwrap_or(self.a.end);
+            let svg = speed_plot(&sw.title, &series, &self.speeds, end * 1e6);
             std::fs::write(self.figs.join(&svg_name), svg)?;
             let _ = writeln!(
                 md,
@@ -498,11 +523,11 @@ impl Report<'_> {
             );
             let _ = writeln!(
                 md,
-                "| run | initiation | 10–20 µs | 20–30 µs | 30–40 µs | 40–50 µs | 50–60 µs | 60–70 µs | 70–80 µs | growth | wall | particle-steps/s |"
+                "| run | initiation | 10–20 µs | 20–30 µs | 30–40 µs | 40–50 µs | 50–60 µs | 60–70 µs | 70–80 µs | initiation to end | max tip speed | growth | wall | particle-steps/s |"
             );
             let _ = writeln!(
                 md,
-                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
+                "| --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- | --- |"
             );
             for v in &sw.runs {
                 let Some(m) = self.get(sw, v) else { continue };
@@ -523,15 +548,20 @@ impl Report<'_> {
                         m.message.clone().unwrap_or_default()
                     )
                 };
+                let to_end = m
+                    .initiation()
+                    .and_then(|t0| m.mean_speed(t0, m.t.last().copied().unwrap_or(t0)));
+                let vmax = m.speed.iter().copied().fold(0.0, f64::max);
                 let _ = writeln!(
                     md,
-                    "| {}{status} | {init} | {} | {:.1} mm | {:.0} s | {:.2e} |",
+                    "| {}{status} | {init} | {} | {} | {vmax:.0} | {:.1} mm | {:.0} s | {:.2e} |",
                     (sw.legend)(v),
                     means
                         .iter()
                         .map(|s| s.map_or("–".to_string(), |s| format!("{s:.0}")))
                         .collect::<Vec<_>>()
                         .join(" | "),
+                    speed_cell(to_end, &self.speeds),
                     growth * 1e3,
                     m.wall,
                     m.psps
@@ -559,7 +589,7 @@ impl Report<'_> {
             }
             let _ = writeln!(
                 md,
-                "\nMean speeds in m/s over 10 µs windows after impact (v/c_S = speed/{:.0}, v/c_R = speed/{:.0}).",
+                "\nMean speeds in m/s over 10 µs windows after impact (v/c_S = speed/{:.0}, v/c_R = speed/{:.0}); *initiation to end*: mean speed from initiation to the end of the run; *max tip speed*: the solver's largest 1 µs moving-box speed.",
                 self.speeds.c_s, self.speeds.c_r
             );
             self.fringes(&mut md, sw)?;
@@ -864,7 +894,7 @@ impl Report<'_> {
         for sw in self
             .sweeps
             .iter()
-            .filter(|sw| sw.id.ends_with("-fine") == !suffix.is_empty())
+            .filter(|sw| sw.id.ends_with("-fine") == !suffix.is_empty() && sw.end.is_none())
         {
             for v in &sw.runs {
                 if let Some(m) = self.get(sw, v) {
@@ -875,11 +905,11 @@ impl Report<'_> {
         }
         let _ = writeln!(
             md,
-            "| (method) the tip never outruns c_L; the crack runs along the bond | largest tip speed of the solver (1 µs moving box, `crack_tips.csv` `speed`) ≤ c_L; tip within 1 mm of the bond line (the crack line moves with the material, and the impact displaces the lower half by about half a millimetre) | {:.0} m/s ({:.3} c_L); {:.3} mm | {} |",
+            "| (method) the tip never outruns c_L; the crack runs along the bond | largest tip speed of the solver (1 µs moving box, `crack_tips.csv` `speed`) ≤ 1.02 c_L (a growing tip advances c_L·Δt per step and also moves with the material); tip within 1 mm of the bond line (the crack line moves with the material, and the impact displaces the lower half by about half a millimetre) | {:.0} m/s ({:.3} c_L); {:.3} mm | {} |",
             fastest,
             fastest / s.c_l,
             off * 1e3,
-            if fastest <= s.c_l * (1.0 + 1e-9) && off < 1e-3 {
+            if fastest <= 1.02 * s.c_l && off < 1e-3 {
                 "holds"
             } else {
                 "fails"
