@@ -912,18 +912,29 @@ fn stress_half_update(
         l[1][0] += n.v[1] * gr[0];
         l[1][1] += n.v[1] * gr[1];
     });
-    stress_apply(p, i, l, mats, half, inv_h)
+    let mech = &mut p.mech[i];
+    let grad_u = p.grad_u.get_mut(i);
+    stress_apply(
+        &mats[mech.mat as usize],
+        &mut p.stress[i],
+        &mut mech.w,
+        grad_u,
+        l,
+        half,
+        inv_h,
+    )
 }
 
-/// The stress half-update of particle `i` from the unscaled velocity gradient `l`
-/// (Σ v ⊗ ∇S in cell units): strain energy density and, with cracks, the displacement
-/// gradient accumulated. Returns whether the new stress is finite.
+/// The stress half-update of one particle of material `mat` from the unscaled velocity
+/// gradient `l` (Σ v ⊗ ∇S in cell units): stress, strain energy density `w` and, with cracks,
+/// the displacement gradient `grad_u` accumulated. Returns whether the new stress is finite.
 #[inline(always)]
 fn stress_apply(
-    p: &mut PartsMut<'_>,
-    i: usize,
+    mat: &Elastic,
+    stress: &mut [f64; 4],
+    w: &mut f64,
+    grad_u: Option<&mut [f64; 4]>,
     mut l: [[f64; 2]; 2],
-    mats: &[Elastic],
     half: f64,
     inv_h: f64,
 ) -> bool {
@@ -931,16 +942,14 @@ fn stress_apply(
         r[0] *= inv_h;
         r[1] *= inv_h;
     }
-    let dw = mats[p.mech[i].mat as usize].update(&mut p.stress[i], l, half);
-    p.mech[i].w += dw;
-    if !p.grad_u.is_empty() {
-        let gu = &mut p.grad_u[i];
+    *w += mat.update(stress, l, half);
+    if let Some(gu) = grad_u {
         gu[0] += l[0][0] * half;
         gu[1] += l[0][1] * half;
         gu[2] += l[1][0] * half;
         gu[3] += l[1][1] * half;
     }
-    let s = p.stress[i];
+    let s = *stress;
     s[0].is_finite() && s[1].is_finite() && s[2].is_finite()
 }
 
@@ -952,11 +961,12 @@ fn stress_apply(
 // a pair only adds signed zeros, which leave a sum that starts at +0 unchanged. (With linear
 // weights a node on the particle's cell line has S = 0 but ∇S ≠ 0, hence GIMP only.)
 
-/// Whether stencil column `a` of `w` is empty (S and S' both zero): skipped, as in
-/// `visit_stencil`.
+/// Whether stencil column `a` of GIMP weights `w` is empty (S and S' both zero): skipped,
+/// as in `visit_stencil`.
 #[inline(always)]
 fn empty_column(w: &Weights2, a: usize) -> bool {
-    w.x.s[a] == 0.0 && w.x.ds[a] == 0.0
+    // GIMP: the middle column always has weight, and S = 0 implies S' = 0.
+    a != 1 && w.x.s[a] == 0.0
 }
 
 /// ∇S (cell units) of the 3×3 stencil, `[a][b]` as `Weights2::g`.
@@ -1025,6 +1035,7 @@ impl Simulation {
         let slot_of = std::mem::take(&mut self.slot_of);
         let acc = self.strips(&|_s, first, p, mut g| {
             let mut acc = Acc::default();
+            p.assert_lengths();
             for i in 0..p.len() {
                 let k = p.kin[i];
                 let m = p.mech[i].m;
@@ -1092,10 +1103,10 @@ impl Simulation {
         let loads = std::mem::take(&mut self.load_now);
         let acc = self.strips(&|_s, first, mut p, mut g| {
             let mut acc = Acc::default();
+            p.assert_lengths();
             let has_mask = !p.fmask.is_empty();
             for i in 0..p.len() {
                 let mech = p.mech[i];
-                let w = p.wts[i];
                 let mask = if has_mask { p.fmask[i] } else { 0 };
                 // External force: traction × edge length (2l = h/ppc) × thickness.
                 let fext = if mech.load > 0 {
@@ -1107,15 +1118,19 @@ impl Simulation {
                 };
                 let vs = mech.vol * inv_h;
                 if gimp && mask == 0 {
-                    let gr = stencil_grads(&w);
-                    let cols = field0_columns(&mut g, &geom, &w);
-                    let l = gather_l(&cols, &w, &gr);
-                    if !stress_apply(&mut p, i, l, &mats, half, inv_h) {
+                    let w = &p.wts[i];
+                    let gr = stencil_grads(w);
+                    let cols = field0_columns(&mut g, &geom, w);
+                    let l = gather_l(&cols, w, &gr);
+                    let mat = &mats[mech.mat as usize];
+                    let s = &mut p.stress[i];
+                    let gu = p.grad_u.get_mut(i);
+                    if !stress_apply(mat, s, &mut p.mech[i].w, gu, l, half, inv_h) {
                         first_fail(&mut acc, first + i, FAIL_STRESS);
                     }
-                    let s = p.stress[i];
+                    let s = *s;
                     for (a, col) in cols.into_iter().enumerate() {
-                        if empty_column(&w, a) {
+                        if empty_column(w, a) {
                             continue;
                         }
                         for (b, n) in col.iter_mut().enumerate() {
@@ -1142,6 +1157,7 @@ impl Simulation {
                     first_fail(&mut acc, first + i, FAIL_STRESS);
                 }
                 let s = p.stress[i];
+                let w = p.wts[i];
                 visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
                     let sh = w.s(a, b);
                     if sh == 0.0 {
@@ -1172,13 +1188,14 @@ impl Simulation {
         let (ncx, ncy) = ((geom.nx - 1) as i64, (geom.ny - 1) as i64);
         let acc = self.strips(&|s, first, p, mut g| {
             let mut acc = Acc::default();
+            p.assert_lengths();
             let has_mask = !p.fmask.is_empty();
             let lo = (s * STRIP) as i64 - 1;
             let hi = ((s + 1) * STRIP) as i64;
             for i in 0..p.len() {
                 let k = p.kin[i];
                 let mech = p.mech[i];
-                let w = p.wts[i];
+                let w = &p.wts[i];
                 let mask = if has_mask { p.fmask[i] } else { 0 };
                 let fast = gimp && mask == 0;
                 let mut acc_p = [0.0; 2];
@@ -1274,16 +1291,19 @@ impl Simulation {
         let mats = std::mem::take(&mut self.mats);
         let acc = self.strips(&|_s, first, mut p, mut g| {
             let mut acc = Acc::default();
+            p.assert_lengths();
             let has_mask = !p.fmask.is_empty();
             for i in 0..p.len() {
                 let mech = p.mech[i];
                 let mask = if has_mask { p.fmask[i] } else { 0 };
                 let ok = if gimp && mask == 0 {
-                    let w = p.wts[i];
-                    let gr = stencil_grads(&w);
-                    let cols = field0_columns(&mut g, &geom, &w);
-                    let l = gather_l(&cols, &w, &gr);
-                    stress_apply(&mut p, i, l, &mats, half, inv_h)
+                    let w = &p.wts[i];
+                    let gr = stencil_grads(w);
+                    let cols = field0_columns(&mut g, &geom, w);
+                    let l = gather_l(&cols, w, &gr);
+                    let mat = &mats[mech.mat as usize];
+                    let gu = p.grad_u.get_mut(i);
+                    stress_apply(mat, &mut p.stress[i], &mut p.mech[i].w, gu, l, half, inv_h)
                 } else {
                     stress_half_update(&mut p, &mut g, i, &geom, &slot_of, &mats, half, inv_h)
                 };
