@@ -23,7 +23,7 @@ use crate::grid::{
 };
 use crate::material::Elastic;
 use crate::particles::{Cold, Kin, Mech, Particles, PartsMut};
-use crate::shape::Weights2;
+use crate::shape::{Weights2, gimp_weights_1d};
 
 /// How the solver runs (not physics).
 #[derive(Debug, Clone, Copy, Default)]
@@ -1036,12 +1036,25 @@ impl Simulation {
         let acc = self.strips(&|_s, first, p, mut g| {
             let mut acc = Acc::default();
             p.assert_lengths();
+            // 1/(4l) of the last particle size seen (all particles of a body share it).
+            let (mut l_last, mut q_last) = (f64::NAN, f64::NAN);
             for i in 0..p.len() {
                 let k = p.kin[i];
                 let m = p.mech[i].m;
-                let w = Weights2::new(shape, geom.xi(k.x), p.mech[i].lh);
-                p.wts[i] = w;
-                grow_box(&mut acc, &w);
+                let lh = p.mech[i].lh;
+                let xi = geom.xi(k.x);
+                if gimp {
+                    if lh != l_last {
+                        (l_last, q_last) = (lh, 0.25 / lh);
+                    }
+                    let wt = &mut p.wts[i];
+                    wt.x = gimp_weights_1d(xi[0], lh, q_last);
+                    wt.y = gimp_weights_1d(xi[1], lh, q_last);
+                } else {
+                    p.wts[i] = Weights2::new(shape, xi, lh);
+                }
+                let w = &p.wts[i];
+                grow_box(&mut acc, w);
                 let (mask, disp) = if cracks {
                     let x0 = p.cold[i].x0;
                     (p.fmask[i], [k.x[0] - x0[0], k.x[1] - x0[1]])
