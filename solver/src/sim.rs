@@ -1066,9 +1066,9 @@ impl Simulation {
                 }
                 let mv = [m * k.v[0], m * k.v[1]];
                 if gimp && mask == 0 {
-                    let cols = field0_columns(&mut g, &geom, &w);
+                    let cols = field0_columns(&mut g, &geom, w);
                     for (a, col) in cols.into_iter().enumerate() {
-                        if empty_column(&w, a) {
+                        if empty_column(w, a) {
                             continue;
                         }
                         for (n, &sy) in col.iter_mut().zip(&w.y.s) {
@@ -1084,7 +1084,7 @@ impl Simulation {
                     }
                     continue;
                 }
-                visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
+                visit_stencil(&mut g, &geom, w, mask, &slot_of, |a, b, n| {
                     let s = w.s(a, b);
                     if s == 0.0 {
                         return;
@@ -1222,9 +1222,9 @@ impl Simulation {
                     }
                 };
                 if fast {
-                    let cols = field0_columns(&mut g, &geom, &w);
+                    let cols = field0_columns(&mut g, &geom, w);
                     for (a, col) in cols.iter().enumerate() {
-                        if empty_column(&w, a) {
+                        if empty_column(w, a) {
                             continue;
                         }
                         for (n, &sy) in col.iter().zip(&w.y.s) {
@@ -1232,7 +1232,7 @@ impl Simulation {
                         }
                     }
                 } else {
-                    visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
+                    visit_stencil(&mut g, &geom, w, mask, &slot_of, |a, b, n| {
                         gather(w.s(a, b), n)
                     });
                 }
@@ -1267,9 +1267,9 @@ impl Simulation {
                 // Re-extrapolate momentum with the same weights and fields (pitfall 2).
                 let mv = [mech.m * v[0], mech.m * v[1]];
                 if fast {
-                    let cols = field0_columns(&mut g, &geom, &w);
+                    let cols = field0_columns(&mut g, &geom, w);
                     for (a, col) in cols.into_iter().enumerate() {
-                        if empty_column(&w, a) {
+                        if empty_column(w, a) {
                             continue;
                         }
                         for (n, &sy) in col.iter_mut().zip(&w.y.s) {
@@ -1279,7 +1279,7 @@ impl Simulation {
                         }
                     }
                 } else {
-                    visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
+                    visit_stencil(&mut g, &geom, w, mask, &slot_of, |a, b, n| {
                         let sh = w.s(a, b);
                         n.q[0] += sh * mv[0];
                         n.q[1] += sh * mv[1];
