@@ -33,8 +33,27 @@ fn main() {
         }
     }
     let dt = t.elapsed().as_secs_f64();
+    // A hash of every particle's state, to check that an optimisation is bitwise neutral.
+    let p = sim.particles();
+    let mut hash = 0xcbf2_9ce4_8422_2325u64;
+    for i in 0..p.len() {
+        let (k, s) = (p.kin[i], p.stress[i]);
+        for v in [
+            k.x[0],
+            k.x[1],
+            k.v[0],
+            k.v[1],
+            s[0],
+            s[1],
+            s[2],
+            s[3],
+            p.mech[i].w,
+        ] {
+            hash = (hash ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3);
+        }
+    }
     println!(
-        "{} particles, {steps} steps, {rows} tip rows: {:.3e} particle-steps/s (1 thread)",
+        "{} particles, {steps} steps, {rows} tip rows: {:.3e} particle-steps/s (1 thread), state hash {hash:016x}",
         sim.particle_count(),
         (sim.particle_count() * steps) as f64 / dt
     );

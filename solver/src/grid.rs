@@ -196,6 +196,29 @@ pub fn visit_stencil(
     }
 }
 
+/// The three field-0 columns of a particle's 3×3 stencil as fixed-size arrays: column `a`
+/// holds nodes (base_x + a, base_y … base_y + 2). One range check per column and none per
+/// node, for the particles whose pairs are all in field 0. All three columns always lie in
+/// the strip's write range (the stencil's base is at most two columns off the strip).
+#[inline(always)]
+pub fn field0_columns<'g>(
+    g: &'g mut GridMut<'_>,
+    geom: &GridGeom,
+    w: &crate::shape::Weights2,
+) -> [&'g mut [Node; 3]; 3] {
+    let ny = geom.ny;
+    let s0 = geom.index(w.x.base as usize, w.y.base as usize) - g.base;
+    let (c0, rest) = g.nodes[s0..].split_at_mut(ny);
+    let (c1, c2) = rest.split_at_mut(ny);
+    [first3(c0), first3(c1), first3(c2)]
+}
+
+#[inline(always)]
+fn first3(col: &mut [Node]) -> &mut [Node; 3] {
+    col.first_chunk_mut::<3>()
+        .expect("stencil column inside the strip's write range")
+}
+
 /// Something combined across strips in a fixed order (deterministic reductions).
 pub trait Reduce: Default + Send {
     /// Combine the result of a left (earlier) range with a right (later) one.

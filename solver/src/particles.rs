@@ -116,6 +116,23 @@ impl<'a> PartsMut<'a> {
     pub fn is_empty(&self) -> bool {
         self.kin.is_empty()
     }
+    /// Assert that every per-particle slice has the length of the view (the optional ones
+    /// may be empty). Called before a particle loop, it lets the compiler drop the range
+    /// checks of `slice[i]` for `i < len()`.
+    #[inline(always)]
+    pub fn assert_lengths(&self) {
+        let n = self.kin.len();
+        assert!(
+            self.mech.len() == n
+                && self.stress.len() == n
+                && self.cold.len() == n
+                && self.x_next.len() == n
+                && self.wts.len() == n
+                && (self.fmask.is_empty() || self.fmask.len() == n)
+                && (self.grad_u.is_empty() || self.grad_u.len() == n),
+            "particle arrays of unequal length"
+        );
+    }
     /// Split at particle `i` (relative to the view).
     pub fn split_at(self, i: usize) -> (PartsMut<'a>, PartsMut<'a>) {
         let (k0, k1) = self.kin.split_at_mut(i);

@@ -78,47 +78,60 @@ fn floor_both(x: f64) -> (f64, i32) {
 #[inline(always)]
 pub fn weights_1d(kind: ShapeFunction, xi: f64, l: f64) -> Weights1 {
     let (cell, icell) = floor_both(xi);
-    let f = xi - cell;
     match kind {
-        ShapeFunction::Gimp => {
-            // A particle in the left half of its cell reaches nodes cell−1 … cell+1, in the
-            // right half cell … cell+2 (l ≤ ½ means it never reaches both). With u the offset
-            // from the middle node (|u| ≤ ½), the outer weights are the GIMP branches written
-            // out for that range, and the middle weight follows from Σ S = 1 (equal to the
-            // branch formula: see `fast_weights_match_reference`).
-            let (base, u) = if f < 0.5 {
-                (icell - 1, f)
-            } else {
-                (icell, f - 1.0)
-            };
-            let q = 0.25 / l;
-            let (sl, dl) = if u <= -l {
-                (-u, -1.0)
-            } else if u < l {
-                let r = l - u;
-                (q * r * r, -2.0 * q * r)
-            } else {
-                (0.0, 0.0)
-            };
-            let (sr, dr) = if u >= l {
-                (u, 1.0)
-            } else if u > -l {
-                let r = l + u;
-                (q * r * r, 2.0 * q * r)
-            } else {
-                (0.0, 0.0)
-            };
+        ShapeFunction::Gimp => gimp_1d(cell, icell, xi, l, 0.25 / l),
+        ShapeFunction::Linear => {
+            let f = xi - cell;
             Weights1 {
-                base,
-                s: [sl, 1.0 - sl - sr, sr],
-                ds: [dl, -dl - dr, dr],
+                base: icell,
+                s: [1.0 - f, f, 0.0],
+                ds: [-1.0, 1.0, 0.0],
             }
         }
-        ShapeFunction::Linear => Weights1 {
-            base: icell,
-            s: [1.0 - f, f, 0.0],
-            ds: [-1.0, 1.0, 0.0],
-        },
+    }
+}
+
+/// GIMP 1D weights at ξ with half-width `l` and `q` = 1/(4l) supplied (the hot loops keep it
+/// across particles of equal size instead of dividing per particle).
+#[inline(always)]
+pub fn gimp_weights_1d(xi: f64, l: f64, q: f64) -> Weights1 {
+    let (cell, icell) = floor_both(xi);
+    gimp_1d(cell, icell, xi, l, q)
+}
+
+#[inline(always)]
+fn gimp_1d(cell: f64, icell: i32, xi: f64, l: f64, q: f64) -> Weights1 {
+    let f = xi - cell;
+    // A particle in the left half of its cell reaches nodes cell−1 … cell+1, in the right
+    // half cell … cell+2 (l ≤ ½ means it never reaches both). With u the offset from the
+    // middle node (|u| ≤ ½), the outer weights are the GIMP branches written out for that
+    // range, and the middle weight follows from Σ S = 1 (equal to the branch formula: see
+    // `fast_weights_match_reference`).
+    let (base, u) = if f < 0.5 {
+        (icell - 1, f)
+    } else {
+        (icell, f - 1.0)
+    };
+    let (sl, dl) = if u <= -l {
+        (-u, -1.0)
+    } else if u < l {
+        let r = l - u;
+        (q * r * r, -2.0 * q * r)
+    } else {
+        (0.0, 0.0)
+    };
+    let (sr, dr) = if u >= l {
+        (u, 1.0)
+    } else if u > -l {
+        let r = l + u;
+        (q * r * r, 2.0 * q * r)
+    } else {
+        (0.0, 0.0)
+    };
+    Weights1 {
+        base,
+        s: [sl, 1.0 - sl - sr, sr],
+        ds: [dl, -dl - dr, dr],
     }
 }
 

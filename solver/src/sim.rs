@@ -18,10 +18,12 @@ use fracture_api::scene::{Analysis, Damping, FieldKind, ShapeFunction};
 use rayon::prelude::*;
 
 use crate::crack::Cracks;
-use crate::grid::{GridGeom, GridMut, Node, PAD, Reduce, STRIP, for_strips, visit_stencil};
+use crate::grid::{
+    GridGeom, GridMut, Node, PAD, Reduce, STRIP, field0_columns, for_strips, visit_stencil,
+};
 use crate::material::Elastic;
 use crate::particles::{Cold, Kin, Mech, Particles, PartsMut};
-use crate::shape::Weights2;
+use crate::shape::{Weights2, gimp_weights_1d};
 
 /// How the solver runs (not physics).
 #[derive(Debug, Clone, Copy, Default)]
@@ -910,21 +912,92 @@ fn stress_half_update(
         l[1][0] += n.v[1] * gr[0];
         l[1][1] += n.v[1] * gr[1];
     });
+    let mech = &mut p.mech[i];
+    let grad_u = p.grad_u.get_mut(i);
+    stress_apply(
+        &mats[mech.mat as usize],
+        &mut p.stress[i],
+        &mut mech.w,
+        grad_u,
+        l,
+        half,
+        inv_h,
+    )
+}
+
+/// The stress half-update of one particle of material `mat` from the unscaled velocity
+/// gradient `l` (Σ v ⊗ ∇S in cell units): stress, strain energy density `w` and, with cracks,
+/// the displacement gradient `grad_u` accumulated. Returns whether the new stress is finite.
+#[inline(always)]
+fn stress_apply(
+    mat: &Elastic,
+    stress: &mut [f64; 4],
+    w: &mut f64,
+    grad_u: Option<&mut [f64; 4]>,
+    mut l: [[f64; 2]; 2],
+    half: f64,
+    inv_h: f64,
+) -> bool {
     for r in &mut l {
         r[0] *= inv_h;
         r[1] *= inv_h;
     }
-    let dw = mats[p.mech[i].mat as usize].update(&mut p.stress[i], l, half);
-    p.mech[i].w += dw;
-    if has_mask {
-        let gu = &mut p.grad_u[i];
+    *w += mat.update(stress, l, half);
+    if let Some(gu) = grad_u {
         gu[0] += l[0][0] * half;
         gu[1] += l[0][1] * half;
         gu[2] += l[1][0] * half;
         gu[3] += l[1][1] * half;
     }
-    let s = p.stress[i];
+    let s = *stress;
     s[0].is_finite() && s[1].is_finite() && s[2].is_finite()
+}
+
+// The field-0 fast path. A particle whose pairs are all in field 0 (every particle of a scene
+// without cracks) with GIMP weights writes to three contiguous 3-node columns. The kernels
+// below do the same arithmetic in the same node order as the `visit_stencil` path, so the
+// results are bitwise identical; they only drop the per-node tests. The generic path skips
+// pairs with S = 0 in P2G and in the force scatter: with GIMP, S = 0 implies ∇S = 0, so such
+// a pair only adds signed zeros, which leave a sum that starts at +0 unchanged. (With linear
+// weights a node on the particle's cell line has S = 0 but ∇S ≠ 0, hence GIMP only.)
+
+/// Whether stencil column `a` of GIMP weights `w` is empty (S and S' both zero): skipped,
+/// as in `visit_stencil`.
+#[inline(always)]
+fn empty_column(w: &Weights2, a: usize) -> bool {
+    // GIMP: the middle column always has weight, and S = 0 implies S' = 0.
+    a != 1 && w.x.s[a] == 0.0
+}
+
+/// ∇S (cell units) of the 3×3 stencil, `[a][b]` as `Weights2::g`.
+#[inline(always)]
+fn stencil_grads(w: &Weights2) -> [[[f64; 2]; 3]; 3] {
+    let mut g = [[[0.0; 2]; 3]; 3];
+    for a in 0..3 {
+        for b in 0..3 {
+            g[a][b] = [w.x.ds[a] * w.y.s[b], w.x.s[a] * w.y.ds[b]];
+        }
+    }
+    g
+}
+
+/// Σ v ⊗ ∇S over the field-0 columns (unscaled, as in `stress_half_update`).
+#[inline(always)]
+fn gather_l(cols: &[&mut [Node; 3]; 3], w: &Weights2, gr: &[[[f64; 2]; 3]; 3]) -> [[f64; 2]; 2] {
+    let mut l = [[0.0; 2]; 2];
+    for a in 0..3 {
+        if empty_column(w, a) {
+            continue;
+        }
+        for b in 0..3 {
+            let (v, g) = (cols[a][b].v, gr[a][b]);
+            l[0][0] += v[0] * g[0];
+            l[0][1] += v[0] * g[1];
+            l[1][0] += v[1] * g[0];
+            l[1][1] += v[1] * g[1];
+        }
+    }
+    l
 }
 
 impl Simulation {
@@ -957,16 +1030,31 @@ impl Simulation {
     fn pass_p2g(&mut self) -> Acc {
         let geom = self.geom;
         let shape = self.shape;
+        let gimp = shape == ShapeFunction::Gimp;
         let cracks = self.cracks.is_some();
         let slot_of = std::mem::take(&mut self.slot_of);
         let acc = self.strips(&|_s, first, p, mut g| {
             let mut acc = Acc::default();
+            p.assert_lengths();
+            // 1/(4l) of the last particle size seen (all particles of a body share it).
+            let (mut l_last, mut q_last) = (f64::NAN, f64::NAN);
             for i in 0..p.len() {
                 let k = p.kin[i];
                 let m = p.mech[i].m;
-                let w = Weights2::new(shape, geom.xi(k.x), p.mech[i].lh);
-                p.wts[i] = w;
-                grow_box(&mut acc, &w);
+                let lh = p.mech[i].lh;
+                let xi = geom.xi(k.x);
+                if gimp {
+                    if lh != l_last {
+                        (l_last, q_last) = (lh, 0.25 / lh);
+                    }
+                    let wt = &mut p.wts[i];
+                    wt.x = gimp_weights_1d(xi[0], lh, q_last);
+                    wt.y = gimp_weights_1d(xi[1], lh, q_last);
+                } else {
+                    p.wts[i] = Weights2::new(shape, xi, lh);
+                }
+                let w = &p.wts[i];
+                grow_box(&mut acc, w);
                 let (mask, disp) = if cracks {
                     let x0 = p.cold[i].x0;
                     (p.fmask[i], [k.x[0] - x0[0], k.x[1] - x0[1]])
@@ -977,7 +1065,26 @@ impl Simulation {
                     first_fail(&mut acc, first + i, FAIL_VELOCITY);
                 }
                 let mv = [m * k.v[0], m * k.v[1]];
-                visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
+                if gimp && mask == 0 {
+                    let cols = field0_columns(&mut g, &geom, w);
+                    for (a, col) in cols.into_iter().enumerate() {
+                        if empty_column(w, a) {
+                            continue;
+                        }
+                        for (n, &sy) in col.iter_mut().zip(&w.y.s) {
+                            let s = w.x.s[a] * sy;
+                            n.m += s * m;
+                            n.p[0] += s * mv[0];
+                            n.p[1] += s * mv[1];
+                            if cracks {
+                                n.u[0] += s * m * disp[0];
+                                n.u[1] += s * m * disp[1];
+                            }
+                        }
+                    }
+                    continue;
+                }
+                visit_stencil(&mut g, &geom, w, mask, &slot_of, |a, b, n| {
                     let s = w.s(a, b);
                     if s == 0.0 {
                         return;
@@ -1000,7 +1107,7 @@ impl Simulation {
     /// Pass 2: velocity gradient from p/m, first stress half-update, forces to the grid.
     fn pass_forces(&mut self) -> Acc {
         let geom = self.geom;
-
+        let gimp = self.shape == ShapeFunction::Gimp;
         let half = 0.5 * self.dt;
         let inv_h = 1.0 / geom.h;
         let h = geom.h;
@@ -1009,15 +1116,11 @@ impl Simulation {
         let loads = std::mem::take(&mut self.load_now);
         let acc = self.strips(&|_s, first, mut p, mut g| {
             let mut acc = Acc::default();
+            p.assert_lengths();
             let has_mask = !p.fmask.is_empty();
             for i in 0..p.len() {
                 let mech = p.mech[i];
-                let w = p.wts[i];
                 let mask = if has_mask { p.fmask[i] } else { 0 };
-                if !stress_half_update(&mut p, &mut g, i, &geom, &slot_of, &mats, half, inv_h) {
-                    first_fail(&mut acc, first + i, FAIL_STRESS);
-                }
-                let s = p.stress[i];
                 // External force: traction × edge length (2l = h/ppc) × thickness.
                 let fext = if mech.load > 0 {
                     let t = loads[mech.load as usize - 1];
@@ -1027,6 +1130,47 @@ impl Simulation {
                     [0.0; 2]
                 };
                 let vs = mech.vol * inv_h;
+                if gimp && mask == 0 {
+                    let w = &p.wts[i];
+                    let gr = stencil_grads(w);
+                    let cols = field0_columns(&mut g, &geom, w);
+                    let l = gather_l(&cols, w, &gr);
+                    let mat = &mats[mech.mat as usize];
+                    let s = &mut p.stress[i];
+                    let gu = p.grad_u.get_mut(i);
+                    if !stress_apply(mat, s, &mut p.mech[i].w, gu, l, half, inv_h) {
+                        first_fail(&mut acc, first + i, FAIL_STRESS);
+                    }
+                    let s = *s;
+                    for (a, col) in cols.into_iter().enumerate() {
+                        if empty_column(w, a) {
+                            continue;
+                        }
+                        for (b, n) in col.iter_mut().enumerate() {
+                            let g = gr[a][b];
+                            let fi = [
+                                -vs * (s[0] * g[0] + s[2] * g[1]),
+                                -vs * (s[2] * g[0] + s[1] * g[1]),
+                            ];
+                            // Without a load the generic path adds S·0 = +0, which changes
+                            // nothing here (see the fast-path note).
+                            if mech.load > 0 {
+                                let sh = w.x.s[a] * w.y.s[b];
+                                n.f[0] += fi[0] + sh * fext[0];
+                                n.f[1] += fi[1] + sh * fext[1];
+                            } else {
+                                n.f[0] += fi[0];
+                                n.f[1] += fi[1];
+                            }
+                        }
+                    }
+                    continue;
+                }
+                if !stress_half_update(&mut p, &mut g, i, &geom, &slot_of, &mats, half, inv_h) {
+                    first_fail(&mut acc, first + i, FAIL_STRESS);
+                }
+                let s = p.stress[i];
+                let w = p.wts[i];
                 visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
                     let sh = w.s(a, b);
                     if sh == 0.0 {
@@ -1049,7 +1193,7 @@ impl Simulation {
     /// weights and fields.
     fn pass_update(&mut self) -> Acc {
         let geom = self.geom;
-
+        let gimp = self.shape == ShapeFunction::Gimp;
         let dt = self.dt;
         let h = geom.h;
         let slot_of = std::mem::take(&mut self.slot_of);
@@ -1057,25 +1201,41 @@ impl Simulation {
         let (ncx, ncy) = ((geom.nx - 1) as i64, (geom.ny - 1) as i64);
         let acc = self.strips(&|s, first, p, mut g| {
             let mut acc = Acc::default();
+            p.assert_lengths();
             let has_mask = !p.fmask.is_empty();
             let lo = (s * STRIP) as i64 - 1;
             let hi = ((s + 1) * STRIP) as i64;
             for i in 0..p.len() {
                 let k = p.kin[i];
                 let mech = p.mech[i];
-                let w = p.wts[i];
+                let w = &p.wts[i];
                 let mask = if has_mask { p.fmask[i] } else { 0 };
+                let fast = gimp && mask == 0;
                 let mut acc_p = [0.0; 2];
                 let mut vbar = [0.0; 2];
-                visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
-                    let sh = w.s(a, b);
+                let mut gather = |sh: f64, n: &Node| {
                     for c in 0..2 {
                         let an = sh * n.a[c];
                         acc_p[c] += an;
                         // (v_old + v_new)/2 = p/m + Δt/2 · f/m
                         vbar[c] += sh * n.v[c] + 0.5 * dt * an;
                     }
-                });
+                };
+                if fast {
+                    let cols = field0_columns(&mut g, &geom, w);
+                    for (a, col) in cols.iter().enumerate() {
+                        if empty_column(w, a) {
+                            continue;
+                        }
+                        for (n, &sy) in col.iter().zip(&w.y.s) {
+                            gather(w.x.s[a] * sy, n);
+                        }
+                    }
+                } else {
+                    visit_stencil(&mut g, &geom, w, mask, &slot_of, |a, b, n| {
+                        gather(w.s(a, b), n)
+                    });
+                }
                 let v_old = k.v;
                 let v = [v_old[0] + dt * acc_p[0], v_old[1] + dt * acc_p[1]];
                 let xn = [k.x[0] + dt * vbar[0], k.x[1] + dt * vbar[1]];
@@ -1106,11 +1266,25 @@ impl Simulation {
                 }
                 // Re-extrapolate momentum with the same weights and fields (pitfall 2).
                 let mv = [mech.m * v[0], mech.m * v[1]];
-                visit_stencil(&mut g, &geom, &w, mask, &slot_of, |a, b, n| {
-                    let sh = w.s(a, b);
-                    n.q[0] += sh * mv[0];
-                    n.q[1] += sh * mv[1];
-                });
+                if fast {
+                    let cols = field0_columns(&mut g, &geom, w);
+                    for (a, col) in cols.into_iter().enumerate() {
+                        if empty_column(w, a) {
+                            continue;
+                        }
+                        for (n, &sy) in col.iter_mut().zip(&w.y.s) {
+                            let sh = w.x.s[a] * sy;
+                            n.q[0] += sh * mv[0];
+                            n.q[1] += sh * mv[1];
+                        }
+                    }
+                } else {
+                    visit_stencil(&mut g, &geom, w, mask, &slot_of, |a, b, n| {
+                        let sh = w.s(a, b);
+                        n.q[0] += sh * mv[0];
+                        n.q[1] += sh * mv[1];
+                    });
+                }
             }
             acc
         });
@@ -1123,16 +1297,30 @@ impl Simulation {
     /// positions committed, strain energy summed.
     fn pass_strain_last(&mut self) -> Acc {
         let geom = self.geom;
-
+        let gimp = self.shape == ShapeFunction::Gimp;
         let half = 0.5 * self.dt;
         let inv_h = 1.0 / geom.h;
         let slot_of = std::mem::take(&mut self.slot_of);
         let mats = std::mem::take(&mut self.mats);
         let acc = self.strips(&|_s, first, mut p, mut g| {
             let mut acc = Acc::default();
+            p.assert_lengths();
+            let has_mask = !p.fmask.is_empty();
             for i in 0..p.len() {
                 let mech = p.mech[i];
-                if !stress_half_update(&mut p, &mut g, i, &geom, &slot_of, &mats, half, inv_h) {
+                let mask = if has_mask { p.fmask[i] } else { 0 };
+                let ok = if gimp && mask == 0 {
+                    let w = &p.wts[i];
+                    let gr = stencil_grads(w);
+                    let cols = field0_columns(&mut g, &geom, w);
+                    let l = gather_l(&cols, w, &gr);
+                    let mat = &mats[mech.mat as usize];
+                    let gu = p.grad_u.get_mut(i);
+                    stress_apply(mat, &mut p.stress[i], &mut p.mech[i].w, gu, l, half, inv_h)
+                } else {
+                    stress_half_update(&mut p, &mut g, i, &geom, &slot_of, &mats, half, inv_h)
+                };
+                if !ok {
                     first_fail(&mut acc, first + i, FAIL_STRESS);
                 }
                 let wnew = p.mech[i].w;
@@ -1146,7 +1334,6 @@ impl Simulation {
         acc
     }
 }
-
 /// Read-only views.
 impl Simulation {
     /// The scene.
