@@ -37,18 +37,22 @@ const EXIT_INTERRUPTED: u8 = 130;
 /// Arguments of `fracture bench`.
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
-    /// Which benchmark.
-    #[arg(value_enum, default_value_t = BenchKind::Throughput)]
-    pub kind: BenchKind,
-    /// Timed steps.
+    /// Which benchmark. Without one: a single throughput run of the seed block (the
+    /// one-line figure of the README).
+    #[arg(value_enum)]
+    pub kind: Option<BenchKind>,
+    /// Timed steps (throughput, skip).
     #[arg(long, default_value_t = 50)]
     pub steps: u64,
     /// Untimed warm-up steps before them.
     #[arg(long, default_value_t = 5)]
     pub warmup: u64,
-    /// Solver threads (0 = one per core).
+    /// Solver threads (0 = one per core); the throughput matrix uses --thread-counts.
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
+    /// Thread counts of the throughput matrix.
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    pub thread_counts: Vec<usize>,
     /// Cell size (m) of the block's grid; 0.0005 gives the seed's 500,000 particles,
     /// 0.002 about 31,000 (a CI-sized run).
     #[arg(long, default_value_t = 0.0005)]
@@ -56,7 +60,20 @@ pub struct BenchArgs {
     /// Particles per cell direction.
     #[arg(long, default_value_t = 2)]
     pub particles_per_cell: u32,
-    /// Print the result as JSON.
+    /// History sample (J and K of every crack tip) every this many steps (throughput).
+    #[arg(long, default_value_t = 1)]
+    pub history_every: u64,
+    /// Accuracy ladder.
+    #[arg(long, value_enum, default_value_t = crate::bench::accuracy::Ladder::Full)]
+    pub ladder: crate::bench::accuracy::Ladder,
+    /// Shorthand for `--ladder quick`.
+    #[arg(long)]
+    pub quick: bool,
+    /// Output folder (accuracy: default `out/accuracy`; throughput and skip: files only
+    /// when given).
+    #[arg(long)]
+    pub out: Option<std::path::PathBuf>,
+    /// Print the result as JSON (single throughput run).
     #[arg(long)]
     pub json: bool,
 }
@@ -65,8 +82,15 @@ pub struct BenchArgs {
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BenchKind {
     /// Particle-steps per second on the seed's impacted Homalite block (125 mm × 250 mm,
-    /// plane strain, GIMP, no cracks).
+    /// plane strain, GIMP): no crack, a crack with J at every history sample, a propagating
+    /// crack, on each of --thread-counts; with the memory-bandwidth model.
     Throughput,
+    /// The verification problems on a ladder of resolutions and settings: error against
+    /// the analytic answer and wall time, convergence orders, Pareto front.
+    Accuracy,
+    /// What a scene does not pay for: crack code, J between samples, inactive grid,
+    /// unrequested snapshot fields.
+    Skip,
 }
 
 /// A scene that could not be loaded: what to print and the exit status.
@@ -387,7 +411,8 @@ pub fn bench(a: BenchArgs) -> ExitCode {
         return ExitCode::from(EXIT_INVALID);
     }
     let result = match a.kind {
-        BenchKind::Throughput => throughput(&a),
+        None => throughput(&a),
+        Some(kind) => return bench_kind(kind, &a),
     };
     match result {
         Ok(Ok(t)) => {
@@ -419,6 +444,66 @@ pub fn bench(a: BenchArgs) -> ExitCode {
             eprintln!("error: the benchmark run failed: {step_error}");
             ExitCode::from(EXIT_FAILED)
         }
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(EXIT_ERROR)
+        }
+    }
+}
+
+/// `fracture bench accuracy | throughput | skip`.
+fn bench_kind(kind: BenchKind, a: &BenchArgs) -> ExitCode {
+    use crate::bench::{accuracy, skip, throughput};
+    let result = match kind {
+        BenchKind::Accuracy => {
+            let ladder = if a.quick {
+                accuracy::Ladder::Quick
+            } else {
+                a.ladder
+            };
+            let out = a
+                .out
+                .clone()
+                .unwrap_or_else(|| std::path::PathBuf::from("out/accuracy"));
+            accuracy::run(
+                ladder,
+                &fracture_solver::verification::Problem::ALL,
+                a.threads,
+                &out,
+            )
+            .map(|_| ())
+        }
+        BenchKind::Throughput => {
+            if a.thread_counts.is_empty() {
+                eprintln!("error: --thread-counts is empty");
+                return ExitCode::from(EXIT_INVALID);
+            }
+            throughput::run(
+                &throughput::Options {
+                    cell_size: a.cell_size,
+                    ppc: a.particles_per_cell,
+                    steps: a.steps,
+                    warmup: a.warmup,
+                    threads: a.thread_counts.clone(),
+                    history_every: a.history_every,
+                },
+                a.out.as_deref(),
+            )
+            .map(|_| ())
+        }
+        BenchKind::Skip => skip::run(
+            &skip::Options {
+                cell_size: a.cell_size,
+                steps: a.steps,
+                warmup: a.warmup,
+                threads: a.threads,
+            },
+            a.out.as_deref(),
+        )
+        .map(|_| ()),
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
             ExitCode::from(EXIT_ERROR)
