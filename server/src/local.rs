@@ -66,6 +66,9 @@ pub struct BenchArgs {
     /// Accuracy ladder.
     #[arg(long, value_enum, default_value_t = crate::bench::accuracy::Ladder::Full)]
     pub ladder: crate::bench::accuracy::Ladder,
+    /// Cost axis of the accuracy plot and Pareto front (cpu: robust to other load).
+    #[arg(long, value_enum, default_value_t = crate::bench::accuracy::Cost::Wall)]
+    pub cost: crate::bench::accuracy::Cost,
     /// Shorthand for `--ladder quick`.
     #[arg(long)]
     pub quick: bool,
@@ -91,6 +94,10 @@ pub enum BenchKind {
     /// What a scene does not pay for: crack code, J between samples, inactive grid,
     /// unrequested snapshot fields.
     Skip,
+    /// All three, into `<out>/throughput`, `<out>/skip` and `<out>/accuracy` (default
+    /// `out/bench`): the one command that regenerates every figure of `docs/performance.md`
+    /// and `docs/accuracy.md`.
+    All,
 }
 
 /// A scene that could not be loaded: what to print and the exit status.
@@ -451,56 +458,29 @@ pub fn bench(a: BenchArgs) -> ExitCode {
     }
 }
 
-/// `fracture bench accuracy | throughput | skip`.
+/// `fracture bench accuracy | throughput | skip | all`.
 fn bench_kind(kind: BenchKind, a: &BenchArgs) -> ExitCode {
-    use crate::bench::{accuracy, skip, throughput};
-    let result = match kind {
-        BenchKind::Accuracy => {
-            let ladder = if a.quick {
-                accuracy::Ladder::Quick
-            } else {
-                a.ladder
-            };
-            let out = a
-                .out
-                .clone()
-                .unwrap_or_else(|| std::path::PathBuf::from("out/accuracy"));
-            accuracy::run(
-                ladder,
-                &fracture_solver::verification::Problem::ALL,
-                a.threads,
-                &out,
-            )
-            .map(|_| ())
-        }
-        BenchKind::Throughput => {
-            if a.thread_counts.is_empty() {
-                eprintln!("error: --thread-counts is empty");
-                return ExitCode::from(EXIT_INVALID);
-            }
-            throughput::run(
-                &throughput::Options {
-                    cell_size: a.cell_size,
-                    ppc: a.particles_per_cell,
-                    steps: a.steps,
-                    warmup: a.warmup,
-                    threads: a.thread_counts.clone(),
-                    history_every: a.history_every,
-                },
-                a.out.as_deref(),
-            )
-            .map(|_| ())
-        }
-        BenchKind::Skip => skip::run(
-            &skip::Options {
-                cell_size: a.cell_size,
-                steps: a.steps,
-                warmup: a.warmup,
-                threads: a.threads,
-            },
-            a.out.as_deref(),
-        )
-        .map(|_| ()),
+    if kind == BenchKind::Throughput && a.thread_counts.is_empty() {
+        eprintln!("error: --thread-counts is empty");
+        return ExitCode::from(EXIT_INVALID);
+    }
+    let result = if kind == BenchKind::All {
+        let root = a
+            .out
+            .clone()
+            .unwrap_or_else(|| std::path::PathBuf::from("out/bench"));
+        [BenchKind::Throughput, BenchKind::Skip, BenchKind::Accuracy]
+            .into_iter()
+            .try_for_each(|k| {
+                let name = match k {
+                    BenchKind::Throughput => "throughput",
+                    BenchKind::Skip => "skip",
+                    _ => "accuracy",
+                };
+                bench_one(k, a, Some(root.join(name)))
+            })
+    } else {
+        bench_one(kind, a, a.out.clone())
     };
     match result {
         Ok(()) => ExitCode::SUCCESS,
@@ -508,5 +488,54 @@ fn bench_kind(kind: BenchKind, a: &BenchArgs) -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::from(EXIT_ERROR)
         }
+    }
+}
+
+fn bench_one(
+    kind: BenchKind,
+    a: &BenchArgs,
+    out: Option<std::path::PathBuf>,
+) -> anyhow::Result<()> {
+    use crate::bench::{accuracy, skip, throughput};
+    match kind {
+        BenchKind::Accuracy => {
+            let ladder = if a.quick {
+                accuracy::Ladder::Quick
+            } else {
+                a.ladder
+            };
+            let out = out.unwrap_or_else(|| std::path::PathBuf::from("out/accuracy"));
+            accuracy::run(
+                ladder,
+                &fracture_solver::verification::Problem::ALL,
+                a.threads,
+                a.cost,
+                &out,
+            )
+            .map(|_| ())
+        }
+        BenchKind::Throughput => throughput::run(
+            &throughput::Options {
+                cell_size: a.cell_size,
+                ppc: a.particles_per_cell,
+                steps: a.steps,
+                warmup: a.warmup,
+                threads: a.thread_counts.clone(),
+                history_every: a.history_every,
+            },
+            out.as_deref(),
+        )
+        .map(|_| ()),
+        BenchKind::Skip => skip::run(
+            &skip::Options {
+                cell_size: a.cell_size,
+                steps: a.steps,
+                warmup: a.warmup,
+                threads: a.threads,
+            },
+            out.as_deref(),
+        )
+        .map(|_| ()),
+        BenchKind::All => anyhow::bail!("bench all runs the others"),
     }
 }

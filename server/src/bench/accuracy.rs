@@ -21,6 +21,32 @@ pub enum Ladder {
     Full,
 }
 
+/// The cost axis of the plot and the Pareto front.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum Cost {
+    /// Wall-clock seconds (the figure on an idle machine).
+    Wall,
+    /// CPU seconds of the process (robust to other load; with `--threads 1` the work).
+    Cpu,
+}
+
+impl Cost {
+    /// The cost of a row.
+    pub fn of(self, r: &Row) -> f64 {
+        match self {
+            Cost::Wall => r.wall_seconds,
+            Cost::Cpu => r.cpu_seconds,
+        }
+    }
+    /// Axis label.
+    pub fn label(self) -> &'static str {
+        match self {
+            Cost::Wall => "wall time",
+            Cost::Cpu => "CPU time",
+        }
+    }
+}
+
 /// A setting family: one curve of the plot.
 #[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Family {
@@ -173,6 +199,8 @@ pub struct Row {
     pub steps: u64,
     /// Wall time of the run (s), building the simulation included.
     pub wall_seconds: f64,
+    /// CPU time of the process during the run (s): the cost measure under load.
+    pub cpu_seconds: f64,
     /// Solver value.
     pub value: f64,
     /// Analytic value.
@@ -195,9 +223,10 @@ fn shape_name(s: ShapeFunction) -> &'static str {
 /// Run one rung.
 pub fn run_rung(r: &Rung, threads: usize) -> Row {
     let s = r.settings;
-    let start = Instant::now();
+    let (start, cpu0) = (Instant::now(), super::process_cpu_seconds());
     let m = r.problem.measure(&s, threads);
     let wall = start.elapsed().as_secs_f64();
+    let cpu = super::process_cpu_seconds() - cpu0;
     let mut row = Row {
         problem: r.problem.name(),
         family: r.family.name(),
@@ -214,6 +243,7 @@ pub fn run_rung(r: &Rung, threads: usize) -> Row {
         particles: 0,
         steps: 0,
         wall_seconds: wall,
+        cpu_seconds: cpu,
         value: f64::NAN,
         reference: f64::NAN,
         error: f64::NAN,
@@ -253,16 +283,15 @@ pub fn convergence_order(rows: &[&Row]) -> Option<f64> {
     (sxx > 0.0).then(|| sxy / sxx)
 }
 
-/// Indices (into `rows`) of the Pareto front of (wall time, |error|): the runs that no
-/// faster-or-equal run beats on error, fastest first.
-pub fn pareto(rows: &[&Row]) -> Vec<usize> {
+/// Indices (into `rows`) of the Pareto front of (cost, |error|): the runs that no
+/// cheaper-or-equal run beats on error, cheapest first.
+pub fn pareto(rows: &[&Row], cost: Cost) -> Vec<usize> {
     let mut idx: Vec<usize> = (0..rows.len())
-        .filter(|&i| rows[i].error.is_finite())
+        .filter(|&i| rows[i].error.is_finite() && cost.of(rows[i]).is_finite())
         .collect();
     idx.sort_by(|&a, &b| {
-        rows[a]
-            .wall_seconds
-            .total_cmp(&rows[b].wall_seconds)
+        cost.of(rows[a])
+            .total_cmp(&cost.of(rows[b]))
             .then(rows[a].error.abs().total_cmp(&rows[b].error.abs()))
     });
     let mut best = f64::INFINITY;
@@ -277,7 +306,7 @@ pub fn pareto(rows: &[&Row]) -> Vec<usize> {
     front
 }
 
-const CSV_HEADER: &str = "problem,family,cell_size,cells_across,ppc,cfl,shape,contour,particles,steps,wall_seconds,value,reference,error,worst,failure\n";
+const CSV_HEADER: &str = "problem,family,cell_size,cells_across,ppc,cfl,shape,contour,particles,steps,wall_seconds,cpu_seconds,value,reference,error,worst,failure\n";
 
 fn csv(rows: &[Row]) -> String {
     let mut s = String::from(CSV_HEADER);
@@ -294,6 +323,7 @@ fn csv(rows: &[Row]) -> String {
             r.particles.to_string(),
             r.steps.to_string(),
             format!("{:.4}", r.wall_seconds),
+            format!("{:.2}", r.cpu_seconds),
             format!("{:.8e}", r.value),
             format!("{:.8e}", r.reference),
             format!("{:.6e}", r.error),
@@ -312,7 +342,7 @@ fn pct(x: f64) -> String {
     }
 }
 
-fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize) -> String {
+fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize, cost: Cost) -> String {
     let mut s = format!(
         "# Accuracy ladder\n\n`fracture bench accuracy --ladder {}` with {} solver threads; {}.\n\
          Error = (solver − analytic)/analytic; Freund: mean |error| over t − t_c ∈ [3, 14] µs \
@@ -365,11 +395,14 @@ fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize) -> 
         ],
         &conv,
     ));
-    s.push_str("\n## Pareto front (error against wall time)\n\n");
+    s.push_str(&format!(
+        "\n## Pareto front (error against {})\n\n",
+        cost.label()
+    ));
     let mut front_rows = Vec::new();
     for p in Problem::ALL {
         let rs: Vec<&Row> = rows.iter().filter(|r| r.problem == p.name()).collect();
-        for i in pareto(&rs) {
+        for i in pareto(&rs, cost) {
             let r = rs[i];
             front_rows.push(vec![
                 r.problem.into(),
@@ -381,6 +414,7 @@ fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize) -> 
                 r.shape.into(),
                 r.contour.to_string(),
                 format!("{:.2}", r.wall_seconds),
+                format!("{:.2}", r.cpu_seconds),
                 pct(r.error),
             ]);
         }
@@ -388,7 +422,7 @@ fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize) -> 
     s.push_str(&markdown_table(
         &[
             "problem", "family", "h (m)", "a/h", "ppc", "cfl", "shape", "contour", "wall s",
-            "error",
+            "CPU s", "error",
         ],
         &front_rows,
     ));
@@ -408,6 +442,7 @@ fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize) -> 
                 r.particles.to_string(),
                 r.steps.to_string(),
                 format!("{:.2}", r.wall_seconds),
+                format!("{:.2}", r.cpu_seconds),
                 sig(r.value, 6),
                 sig(r.reference, 6),
                 pct(r.error),
@@ -429,6 +464,7 @@ fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize) -> 
             "particles",
             "steps",
             "wall s",
+            "CPU s",
             "value",
             "reference",
             "error",
@@ -446,6 +482,7 @@ pub fn run(
     ladder: Ladder,
     problems: &[Problem],
     threads: usize,
+    cost: Cost,
     out: &Path,
 ) -> anyhow::Result<Vec<Row>> {
     let machine = Machine::now();
@@ -473,20 +510,35 @@ pub fn run(
             }
         );
         rows.push(row);
-        // Keep what is done on disk: a long ladder interrupted still leaves its rows.
-        write_file(out, "accuracy.csv", &csv(&rows))?;
+        // Keep what is done on disk: a long ladder interrupted still leaves its report.
+        write_reports(out, &rows, &machine, ladder, threads, cost)?;
     }
-    let md = markdown(&rows, &machine, ladder, threads);
-    write_file(out, "accuracy.md", &md)?;
-    write_file(out, "accuracy.svg", &super::svg::accuracy_plot(&rows))?;
-    write_file(
-        out,
-        "accuracy.json",
-        &serde_json::to_string_pretty(&serde_json::json!({"machine": machine, "runs": rows}))?,
-    )?;
+    let md = markdown(&rows, &machine, ladder, threads, cost);
     #[allow(clippy::print_stdout)]
     {
         println!("{md}");
     }
     Ok(rows)
+}
+
+fn write_reports(
+    out: &Path,
+    rows: &[Row],
+    machine: &Machine,
+    ladder: Ladder,
+    threads: usize,
+    cost: Cost,
+) -> anyhow::Result<()> {
+    write_file(out, "accuracy.csv", &csv(rows))?;
+    write_file(
+        out,
+        "accuracy.md",
+        &markdown(rows, machine, ladder, threads, cost),
+    )?;
+    write_file(out, "accuracy.svg", &super::svg::accuracy_plot(rows, cost))?;
+    write_file(
+        out,
+        "accuracy.json",
+        &serde_json::to_string_pretty(&serde_json::json!({"machine": machine, "runs": rows}))?,
+    )
 }

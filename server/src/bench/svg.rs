@@ -5,7 +5,7 @@ use std::fmt::Write;
 
 use fracture_solver::verification::Problem;
 
-use super::accuracy::{Family, Row, pareto};
+use super::accuracy::{Cost, Family, Row, pareto};
 
 const PANEL_W: f64 = 400.0;
 const PANEL_H: f64 = 290.0;
@@ -42,7 +42,7 @@ fn decades(lo: f64, hi: f64) -> (f64, f64) {
 }
 
 /// The plot as an SVG document.
-pub fn accuracy_plot(rows: &[Row]) -> String {
+pub fn accuracy_plot(rows: &[Row], cost: Cost) -> String {
     let problems: Vec<Problem> = Problem::ALL
         .into_iter()
         .filter(|p| rows.iter().any(|r| r.problem == p.name()))
@@ -83,7 +83,7 @@ pub fn accuracy_plot(rows: &[Row]) -> String {
         let oy = legend_h + (k / COLS) as f64 * PANEL_H;
         let rs: Vec<&Row> = rows
             .iter()
-            .filter(|r| r.problem == p.name() && r.error.is_finite() && r.wall_seconds > 0.0)
+            .filter(|r| r.problem == p.name() && r.error.is_finite() && cost.of(r) > 0.0)
             .collect();
         let pw = PANEL_W - MARGIN_L - MARGIN_R;
         let ph = PANEL_H - MARGIN_T - MARGIN_B;
@@ -106,10 +106,8 @@ pub fn accuracy_plot(rows: &[Row]) -> String {
         // |error| floor at 1e-6 so an exact answer stays on the log axis.
         let err = |r: &Row| r.error.abs().max(1e-6);
         let (tx0, tx1) = decades(
-            rs.iter()
-                .map(|r| r.wall_seconds)
-                .fold(f64::INFINITY, f64::min),
-            rs.iter().map(|r| r.wall_seconds).fold(0.0, f64::max),
+            rs.iter().map(|r| cost.of(r)).fold(f64::INFINITY, f64::min),
+            rs.iter().map(|r| cost.of(r)).fold(0.0, f64::max),
         );
         let (ey0, ey1) = decades(
             rs.iter().map(|r| err(r)).fold(f64::INFINITY, f64::min),
@@ -147,9 +145,10 @@ pub fn accuracy_plot(rows: &[Row]) -> String {
         }
         let _ = writeln!(
             s,
-            r#"<text x="{}" y="{}" text-anchor="middle">wall time</text><text transform="translate({},{}) rotate(-90)" text-anchor="middle">|error|</text>"#,
+            r#"<text x="{}" y="{}" text-anchor="middle">{}</text><text transform="translate({},{}) rotate(-90)" text-anchor="middle">|error|</text>"#,
             ox + MARGIN_L + 0.5 * pw,
             oy + PANEL_H - 12.0,
+            cost.label(),
             ox + 14.0,
             oy + MARGIN_T + 0.5 * ph
         );
@@ -159,10 +158,10 @@ pub fn accuracy_plot(rows: &[Row]) -> String {
             if pts.is_empty() {
                 continue;
             }
-            pts.sort_by(|a, b| a.wall_seconds.total_cmp(&b.wall_seconds));
+            pts.sort_by(|a, b| cost.of(a).total_cmp(&cost.of(b)));
             let path: Vec<String> = pts
                 .iter()
-                .map(|r| format!("{:.1},{:.1}", px(r.wall_seconds), py(err(r))))
+                .map(|r| format!("{:.1},{:.1}", px(cost.of(r)), py(err(r))))
                 .collect();
             let _ = writeln!(
                 s,
@@ -174,11 +173,11 @@ pub fn accuracy_plot(rows: &[Row]) -> String {
                 let _ = writeln!(
                     s,
                     r#"<circle cx="{:.1}" cy="{:.1}" r="3" fill="{}"><title>{}</title></circle>"#,
-                    px(r.wall_seconds),
+                    px(cost.of(r)),
                     py(err(r)),
                     colour(f),
                     escape(&format!(
-                        "{} h={:e} ppc={} cfl={} {} contour={}: {:+.3} % in {:.2} s",
+                        "{} h={:e} ppc={} cfl={} {} contour={}: {:+.3} % in {:.2} s wall, {:.2} s CPU",
                         r.family,
                         r.cell_size,
                         r.ppc,
@@ -186,15 +185,16 @@ pub fn accuracy_plot(rows: &[Row]) -> String {
                         r.shape,
                         r.contour,
                         100.0 * r.error,
-                        r.wall_seconds
+                        r.wall_seconds,
+                        r.cpu_seconds
                     ))
                 );
             }
         }
-        let front = pareto(&rs);
+        let front = pareto(&rs, cost);
         let path: Vec<String> = front
             .iter()
-            .map(|&i| format!("{:.1},{:.1}", px(rs[i].wall_seconds), py(err(rs[i]))))
+            .map(|&i| format!("{:.1},{:.1}", px(cost.of(rs[i])), py(err(rs[i]))))
             .collect();
         let _ = writeln!(
             s,
@@ -205,7 +205,7 @@ pub fn accuracy_plot(rows: &[Row]) -> String {
             let _ = writeln!(
                 s,
                 r#"<circle cx="{:.1}" cy="{:.1}" r="5.5" fill="none" stroke="black"/>"#,
-                px(rs[i].wall_seconds),
+                px(cost.of(rs[i])),
                 py(err(rs[i]))
             );
         }
