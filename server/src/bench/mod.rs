@@ -51,6 +51,21 @@ pub fn sig(x: f64, digits: usize) -> String {
     format!("{x:.decimals$}")
 }
 
+/// Median of `xs` (NaN when empty): the per-step time least disturbed by other load.
+pub fn median(xs: &[f64]) -> f64 {
+    let mut v: Vec<f64> = xs.iter().copied().filter(|x| x.is_finite()).collect();
+    if v.is_empty() {
+        return f64::NAN;
+    }
+    v.sort_by(f64::total_cmp);
+    let n = v.len();
+    if n % 2 == 1 {
+        v[n / 2]
+    } else {
+        0.5 * (v[n / 2 - 1] + v[n / 2])
+    }
+}
+
 /// CPU time (user + system) of this process so far, in seconds, from `/proc/self/stat`
 /// (Linux, USER_HZ = 100); NaN where unavailable. Under load it measures the work of a
 /// single-threaded run better than the wall clock does.

@@ -87,8 +87,10 @@ pub struct Run {
     pub steps: u64,
     /// Wall time of the timed steps (s).
     pub wall_seconds: f64,
-    /// Particle-steps per second.
+    /// Particle-steps per second (all timed steps).
     pub particle_steps_per_second: f64,
+    /// Particle-steps per second of the median step (robust to other load).
+    pub median_particle_steps_per_second: f64,
     /// J evaluations during the timed steps.
     pub j_evaluations: u64,
     /// Timed steps in which a tip grew.
@@ -220,16 +222,20 @@ fn time_case(case: Case, threads: usize, o: &Options) -> anyhow::Result<(Run, f6
     let c0 = sim.work_counters();
     let mut growth = 0;
     let mut active = 0.0;
+    let mut times = Vec::with_capacity(o.steps as usize);
     let start = Instant::now();
     for k in 0..o.steps {
+        let t0 = Instant::now();
         let st = sim
             .step()
             .map_err(|e| anyhow::anyhow!("{}: {e}", case.name()))?;
         growth += u64::from(st.grew);
         active += st.active_nodes as f64;
         sample(&mut sim, o.warmup + k + 1);
+        times.push(t0.elapsed().as_secs_f64());
     }
     let wall = start.elapsed().as_secs_f64();
+    let med = super::median(&times);
     let c1 = sim.work_counters();
     let particles = sim.particle_count();
     let nodes_per_particle = active / (o.steps.max(1) as f64) / particles.max(1) as f64;
@@ -247,6 +253,7 @@ fn time_case(case: Case, threads: usize, o: &Options) -> anyhow::Result<(Run, f6
             steps: o.steps,
             wall_seconds: wall,
             particle_steps_per_second: rate,
+            median_particle_steps_per_second: particles as f64 / med,
             j_evaluations: c1.j_evaluations - c0.j_evaluations,
             growth_steps: growth,
             bytes_per_particle_step: model.total(),
@@ -327,7 +334,7 @@ pub fn run(o: &Options, out: Option<&Path>) -> anyhow::Result<Report> {
             &serde_json::to_string_pretty(&report)?,
         )?;
         let mut csv = String::from(
-            "case,threads,particles,steps,wall_seconds,particle_steps_per_second,j_evaluations,growth_steps,bytes_per_particle_step,model_gb_per_s,fraction_of_bandwidth\n",
+            "case,threads,particles,steps,wall_seconds,particle_steps_per_second,median_particle_steps_per_second,j_evaluations,growth_steps,bytes_per_particle_step,model_gb_per_s,fraction_of_bandwidth\n",
         );
         for r in &report.runs {
             csv.push_str(&csv_line(&[
@@ -337,6 +344,7 @@ pub fn run(o: &Options, out: Option<&Path>) -> anyhow::Result<Report> {
                 r.steps.to_string(),
                 format!("{:.5}", r.wall_seconds),
                 format!("{:.6e}", r.particle_steps_per_second),
+                format!("{:.6e}", r.median_particle_steps_per_second),
                 r.j_evaluations.to_string(),
                 r.growth_steps.to_string(),
                 format!("{:.1}", r.bytes_per_particle_step),
@@ -368,6 +376,7 @@ fn markdown(r: &Report) -> String {
                 x.threads.to_string(),
                 format!("{:.3e}", x.wall_seconds / x.steps.max(1) as f64),
                 format!("{:.2} M", x.particle_steps_per_second / 1e6),
+                format!("{:.2} M", x.median_particle_steps_per_second / 1e6),
                 x.j_evaluations.to_string(),
                 x.growth_steps.to_string(),
                 format!("{:.0}", x.bytes_per_particle_step),
@@ -382,6 +391,7 @@ fn markdown(r: &Report) -> String {
             "threads",
             "s/step",
             "particle-steps/s",
+            "median step (particle-steps/s)",
             "J evaluations",
             "growth steps",
             "model B/particle-step",
