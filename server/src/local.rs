@@ -69,6 +69,9 @@ pub struct BenchArgs {
     /// Cost axis of the accuracy plot and Pareto front (cpu: robust to other load).
     #[arg(long, value_enum, default_value_t = crate::bench::accuracy::Cost::Wall)]
     pub cost: crate::bench::accuracy::Cost,
+    /// Accuracy: run only these setting families (default: all).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub families: Vec<crate::bench::accuracy::Family>,
     /// Shorthand for `--ladder quick`.
     #[arg(long)]
     pub quick: bool,
@@ -508,6 +511,7 @@ fn bench_one(
             accuracy::run(
                 ladder,
                 &fracture_solver::verification::Problem::ALL,
+                &a.families,
                 a.threads,
                 a.cost,
                 &out,

@@ -48,7 +48,7 @@ impl Cost {
 }
 
 /// A setting family: one curve of the plot.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
+#[derive(clap::ValueEnum, Debug, Clone, Copy, PartialEq, Eq, PartialOrd, Ord, Hash)]
 pub enum Family {
     /// Cell size (GIMP, 2×2 particles per cell, cfl 0.5, contour 2).
     Resolution,
@@ -481,12 +481,16 @@ fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize, cos
 pub fn run(
     ladder: Ladder,
     problems: &[Problem],
+    families: &[Family],
     threads: usize,
     cost: Cost,
     out: &Path,
 ) -> anyhow::Result<Vec<Row>> {
     let machine = Machine::now();
-    let rungs = rungs(ladder, problems);
+    let rungs: Vec<Rung> = rungs(ladder, problems)
+        .into_iter()
+        .filter(|r| families.is_empty() || families.contains(&r.family))
+        .collect();
     let mut rows = Vec::new();
     for (k, r) in rungs.iter().enumerate() {
         let row = run_rung(r, threads);
