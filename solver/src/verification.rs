@@ -95,7 +95,7 @@ impl Settings {
     /// tie rule puts those particles on one side) reads K_I far off (+100 % at 3 per cell on
     /// the centre crack). Half a particle spacing, h/(2·ppc), for odd counts; 0 for even.
     pub fn crack_offset(&self) -> f64 {
-        if self.particles_per_cell % 2 == 1 {
+        if !self.particles_per_cell.is_multiple_of(2) {
             0.5 * self.cell_size / f64::from(self.particles_per_cell)
         } else {
             0.0

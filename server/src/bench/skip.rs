@@ -73,7 +73,7 @@ fn time_steps(
     for k in 1..=o.steps {
         let start = Instant::now();
         sim.step().map_err(|e| anyhow::anyhow!("{e}"))?;
-        if every > 0 && k % every == 0 {
+        if every > 0 && k.is_multiple_of(every) {
             let _ = sim.crack_tips();
         }
         times.push(start.elapsed().as_secs_f64());

@@ -210,7 +210,7 @@ fn time_case(case: Case, threads: usize, o: &Options) -> anyhow::Result<(Run, f6
         .with_context(|| format!("building the {} block", case.name()))?;
     let every = o.history_every.max(1);
     let sample = |sim: &mut Simulation, k: u64| {
-        if case != Case::NoCrack && k % every == 0 {
+        if case != Case::NoCrack && k.is_multiple_of(every) {
             let _ = sim.crack_tips();
         }
     };
