@@ -90,16 +90,12 @@ impl Settings {
             j_contour: 2,
         }
     }
-    /// Offset that keeps a crack at mid-cell off the particle rows: with an odd number of
-    /// particles per cell a row lies at mid-cell, and a crack through a particle row (the
-    /// tie rule puts those particles on one side) reads K_I far off (+100 % at 3 per cell on
-    /// the centre crack). Half a particle spacing, h/(2·ppc), for odd counts; 0 for even.
-    pub fn crack_offset(&self) -> f64 {
-        if !self.particles_per_cell.is_multiple_of(2) {
-            0.5 * self.cell_size / f64::from(self.particles_per_cell)
-        } else {
-            0.0
-        }
+    /// Width of the band of a loaded edge that holds exactly the outermost particle row:
+    /// h/ppc, midway between the first and second rows (h/2 at 2 per cell, as the tests'
+    /// scenes). A band of h/2 at an odd count would end exactly on the middle row and load
+    /// two rows (traction doubled: K_I +100 % at 3 per cell).
+    pub fn load_band(&self) -> f64 {
+        self.cell_size / f64::from(self.particles_per_cell.max(1))
     }
     fn shape_name(&self) -> &'static str {
         match self.shape {
@@ -363,10 +359,11 @@ impl Measurement {
 /// to 300 µs. Reference: K_I = σ√(πa)·F(a/b) (Tada).
 pub fn center_crack(s: &Settings) -> Result<Built, VerifyError> {
     let h = s.cell_size;
+    let lb = s.load_band();
     let (b, half_h, a) = (0.040, 0.060, 0.0085);
     let m = 2.0 * h;
     let cx = m + b;
-    let cy = m + half_h + 0.5 * h + s.crack_offset();
+    let cy = m + half_h + 0.5 * h;
     let v = json!({
         "name": "center-crack",
         "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [2.0 * b + 2.0 * m, 2.0 * half_h + 2.0 * m + h],
@@ -376,9 +373,9 @@ pub fn center_crack(s: &Settings) -> Result<Built, VerifyError> {
                     "particles_per_cell": s.particles_per_cell}],
         "cracks": [{"points": [[cx - a, cy], [cx + a, cy]], "j_contour": s.j_contour}],
         "loads": [
-            {"region": {"rectangle": {"min": [0.0, 2.0 * half_h + m + h - 0.5 * h], "max": [1.0, 1.0]}},
+            {"region": {"rectangle": {"min": [0.0, 2.0 * half_h + m + h - lb], "max": [1.0, 1.0]}},
              "traction": [0.0, 1.0e6], "ramp_time": 1.5e-4},
-            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, m + 0.5 * h]}},
+            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, m + lb]}},
              "traction": [0.0, -1.0e6], "ramp_time": 1.5e-4}
         ],
         "damping": {"kind": "viscous", "coefficient": 4.0e4},
@@ -395,9 +392,10 @@ pub fn center_crack(s: &Settings) -> Result<Built, VerifyError> {
 /// Reference: K_I = σ√(πa)·F(a/b) (Tada).
 pub fn edge_crack(s: &Settings) -> Result<Built, VerifyError> {
     let h = s.cell_size;
+    let lb = s.load_band();
     let (b, half_h, a) = (0.040, 0.048, 0.0125);
     let m = 2.0 * h;
-    let cy = m + half_h + 0.5 * h + s.crack_offset();
+    let cy = m + half_h + 0.5 * h;
     let v = json!({
         "name": "edge-crack",
         "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [b + 2.0 * m, 2.0 * half_h + 2.0 * m + h],
@@ -407,9 +405,9 @@ pub fn edge_crack(s: &Settings) -> Result<Built, VerifyError> {
                     "particles_per_cell": s.particles_per_cell}],
         "cracks": [{"points": [[m - 0.5 * h, cy], [m + a, cy]], "j_contour": s.j_contour}],
         "loads": [
-            {"region": {"rectangle": {"min": [0.0, 2.0 * half_h + m + 0.5 * h], "max": [1.0, 1.0]}},
+            {"region": {"rectangle": {"min": [0.0, 2.0 * half_h + m + h - lb], "max": [1.0, 1.0]}},
              "traction": [0.0, 1.0e6], "ramp_time": 1.2e-4},
-            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, m + 0.5 * h]}},
+            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, m + lb]}},
              "traction": [0.0, -1.0e6], "ramp_time": 1.2e-4}
         ],
         "damping": {"kind": "viscous", "coefficient": 5.0e4},
@@ -426,10 +424,10 @@ pub fn edge_crack(s: &Settings) -> Result<Built, VerifyError> {
 /// `shear-crack.json`). Reference: K_II = τ√(πa).
 pub fn shear_crack(s: &Settings) -> Result<Built, VerifyError> {
     let h = s.cell_size;
+    let lb = s.load_band();
     let (w, a) = (0.120, 0.0085);
     let m = 2.0 * h;
     let c = m + 0.5 * w + 0.5 * h;
-    let cy = c + s.crack_offset();
     let tau = 1.0e6;
     let top = m + w + h;
     let v = json!({
@@ -439,15 +437,15 @@ pub fn shear_crack(s: &Settings) -> Result<Built, VerifyError> {
         "materials": {"m": homalite()},
         "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [top, top]}},
                     "particles_per_cell": s.particles_per_cell}],
-        "cracks": [{"points": [[c - a, cy], [c + a, cy]], "j_contour": s.j_contour}],
+        "cracks": [{"points": [[c - a, c], [c + a, c]], "j_contour": s.j_contour}],
         "loads": [
-            {"region": {"rectangle": {"min": [m + 0.5 * h, top - 0.5 * h], "max": [top - 0.5 * h, top]}},
+            {"region": {"rectangle": {"min": [m + lb, top - lb], "max": [top - lb, top]}},
              "traction": [tau, 0.0], "ramp_time": 2.5e-4},
-            {"region": {"rectangle": {"min": [m + 0.5 * h, m], "max": [top - 0.5 * h, m + 0.5 * h]}},
+            {"region": {"rectangle": {"min": [m + lb, m], "max": [top - lb, m + lb]}},
              "traction": [-tau, 0.0], "ramp_time": 2.5e-4},
-            {"region": {"rectangle": {"min": [top - 0.5 * h, m], "max": [top, top]}},
+            {"region": {"rectangle": {"min": [top - lb, m], "max": [top, top]}},
              "traction": [0.0, tau], "ramp_time": 2.5e-4},
-            {"region": {"rectangle": {"min": [m, m], "max": [m + 0.5 * h, top]}},
+            {"region": {"rectangle": {"min": [m, m], "max": [m + lb, top]}},
              "traction": [0.0, -tau], "ramp_time": 2.5e-4}
         ],
         "damping": {"kind": "viscous", "coefficient": 6.0e4},
@@ -532,6 +530,7 @@ pub struct FreundScene {
 /// tip and the far roller) reach the tip 2·20 mm/c_L = 15.7 µs after t_c.
 pub fn freund(s: &Settings) -> Result<FreundScene, VerifyError> {
     let h = s.cell_size;
+    let lb = s.load_band();
     let m = 2.0 * h;
     let (b, below, above) = (0.040, 0.040, 0.030);
     let yc = m + below + 0.5 * h;
@@ -544,18 +543,18 @@ pub fn freund(s: &Settings) -> Result<FreundScene, VerifyError> {
         "materials": {"m": homalite()},
         "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [m + b, top]}},
                     "particles_per_cell": s.particles_per_cell}],
-        "cracks": [{"points": [[m - 0.5 * h, yc + s.crack_offset()], [m + 0.020, yc + s.crack_offset()]], "j_contour": s.j_contour}],
+        "cracks": [{"points": [[m - 0.5 * h, yc], [m + 0.020, yc]], "j_contour": s.j_contour}],
         "boundary_conditions": [
             {"region": {"rectangle": {"min": [0.0, 0.0], "max": [m + 0.1 * h, 1.0]}}, "velocity": {"x": 0.0}},
             {"region": {"rectangle": {"min": [m + b - 0.1 * h, 0.0], "max": [1.0, 1.0]}}, "velocity": {"x": 0.0}}
         ],
-        "loads": [{"region": {"rectangle": {"min": [0.0, top - 0.5 * h], "max": [1.0, 1.0]}},
+        "loads": [{"region": {"rectangle": {"min": [0.0, top - lb], "max": [1.0, 1.0]}},
                    "traction": [0.0, sigma]}],
         "time": {"end": 2.9e-5, "cfl": s.cfl}
     }))?;
     let c_l = scene.materials["m"].wave_speeds(scene.analysis).c_l;
     Ok(FreundScene {
-        t_c: (top - yc - s.crack_offset()) / c_l,
+        t_c: (top - yc) / c_l,
         scene,
         sigma,
         c_l,
@@ -702,6 +701,7 @@ pub struct WaveScene {
 /// Reference: front speed c_L, particle velocity σ/(ρc_L).
 pub fn wave_bar(s: &Settings) -> Result<WaveScene, VerifyError> {
     let h = s.cell_size;
+    let lb = s.load_band();
     let m = 2.0 * h;
     let len = 0.200;
     let sigma = 1.0e6;
@@ -714,7 +714,7 @@ pub fn wave_bar(s: &Settings) -> Result<WaveScene, VerifyError> {
                     "particles_per_cell": s.particles_per_cell}],
         "boundary_conditions": [{"region": {"rectangle": {"min": [0.0, 0.0], "max": [gx, gy]}},
                                  "velocity": {"y": 0.0}}],
-        "loads": [{"region": {"rectangle": {"min": [m, m], "max": [m + 0.5 * h, 2.0 * m]}},
+        "loads": [{"region": {"rectangle": {"min": [m, m], "max": [m + lb, 2.0 * m]}},
                    "traction": [sigma, 0.0]}],
         "time": {"end": 6.0e-5, "cfl": s.cfl}
     }))?;
