@@ -37,18 +37,22 @@ const EXIT_INTERRUPTED: u8 = 130;
 /// Arguments of `fracture bench`.
 #[derive(clap::Args, Debug)]
 pub struct BenchArgs {
-    /// Which benchmark.
-    #[arg(value_enum, default_value_t = BenchKind::Throughput)]
-    pub kind: BenchKind,
-    /// Timed steps.
+    /// Which benchmark. Without one: a single throughput run of the seed block (the
+    /// one-line figure of the README).
+    #[arg(value_enum)]
+    pub kind: Option<BenchKind>,
+    /// Timed steps (throughput, skip).
     #[arg(long, default_value_t = 50)]
     pub steps: u64,
     /// Untimed warm-up steps before them.
     #[arg(long, default_value_t = 5)]
     pub warmup: u64,
-    /// Solver threads (0 = one per core).
+    /// Solver threads (0 = one per core); the throughput matrix uses --thread-counts.
     #[arg(long, default_value_t = 0)]
     pub threads: usize,
+    /// Thread counts of the throughput matrix.
+    #[arg(long, value_delimiter = ',', default_value = "1,2")]
+    pub thread_counts: Vec<usize>,
     /// Cell size (m) of the block's grid; 0.0005 gives the seed's 500,000 particles,
     /// 0.002 about 31,000 (a CI-sized run).
     #[arg(long, default_value_t = 0.0005)]
@@ -56,7 +60,26 @@ pub struct BenchArgs {
     /// Particles per cell direction.
     #[arg(long, default_value_t = 2)]
     pub particles_per_cell: u32,
-    /// Print the result as JSON.
+    /// History sample (J and K of every crack tip) every this many steps (throughput).
+    #[arg(long, default_value_t = 1)]
+    pub history_every: u64,
+    /// Accuracy ladder.
+    #[arg(long, value_enum, default_value_t = crate::bench::accuracy::Ladder::Full)]
+    pub ladder: crate::bench::accuracy::Ladder,
+    /// Cost axis of the accuracy plot and Pareto front (cpu: robust to other load).
+    #[arg(long, value_enum, default_value_t = crate::bench::accuracy::Cost::Wall)]
+    pub cost: crate::bench::accuracy::Cost,
+    /// Accuracy: run only these setting families (default: all).
+    #[arg(long, value_enum, value_delimiter = ',')]
+    pub families: Vec<crate::bench::accuracy::Family>,
+    /// Shorthand for `--ladder quick`.
+    #[arg(long)]
+    pub quick: bool,
+    /// Output folder (accuracy: default `out/accuracy`; throughput and skip: files only
+    /// when given).
+    #[arg(long)]
+    pub out: Option<std::path::PathBuf>,
+    /// Print the result as JSON (single throughput run).
     #[arg(long)]
     pub json: bool,
 }
@@ -65,8 +88,19 @@ pub struct BenchArgs {
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
 pub enum BenchKind {
     /// Particle-steps per second on the seed's impacted Homalite block (125 mm × 250 mm,
-    /// plane strain, GIMP, no cracks).
+    /// plane strain, GIMP): no crack, a crack with J at every history sample, a propagating
+    /// crack, on each of --thread-counts; with the memory-bandwidth model.
     Throughput,
+    /// The verification problems on a ladder of resolutions and settings: error against
+    /// the analytic answer and wall time, convergence orders, Pareto front.
+    Accuracy,
+    /// What a scene does not pay for: crack code, J between samples, inactive grid,
+    /// unrequested snapshot fields.
+    Skip,
+    /// All three, into `<out>/throughput`, `<out>/skip` and `<out>/accuracy` (default
+    /// `out/bench`): the one command that regenerates every figure of `docs/performance.md`
+    /// and `docs/accuracy.md`.
+    All,
 }
 
 /// A scene that could not be loaded: what to print and the exit status.
@@ -387,7 +421,8 @@ pub fn bench(a: BenchArgs) -> ExitCode {
         return ExitCode::from(EXIT_INVALID);
     }
     let result = match a.kind {
-        BenchKind::Throughput => throughput(&a),
+        None => throughput(&a),
+        Some(kind) => return bench_kind(kind, &a),
     };
     match result {
         Ok(Ok(t)) => {
@@ -423,5 +458,88 @@ pub fn bench(a: BenchArgs) -> ExitCode {
             eprintln!("error: {e:#}");
             ExitCode::from(EXIT_ERROR)
         }
+    }
+}
+
+/// `fracture bench accuracy | throughput | skip | all`.
+fn bench_kind(kind: BenchKind, a: &BenchArgs) -> ExitCode {
+    if kind == BenchKind::Throughput && a.thread_counts.is_empty() {
+        eprintln!("error: --thread-counts is empty");
+        return ExitCode::from(EXIT_INVALID);
+    }
+    let result = if kind == BenchKind::All {
+        let root = a
+            .out
+            .clone()
+            .unwrap_or_else(|| std::path::PathBuf::from("out/bench"));
+        [BenchKind::Throughput, BenchKind::Skip, BenchKind::Accuracy]
+            .into_iter()
+            .try_for_each(|k| {
+                let name = match k {
+                    BenchKind::Throughput => "throughput",
+                    BenchKind::Skip => "skip",
+                    _ => "accuracy",
+                };
+                bench_one(k, a, Some(root.join(name)))
+            })
+    } else {
+        bench_one(kind, a, a.out.clone())
+    };
+    match result {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: {e:#}");
+            ExitCode::from(EXIT_ERROR)
+        }
+    }
+}
+
+fn bench_one(
+    kind: BenchKind,
+    a: &BenchArgs,
+    out: Option<std::path::PathBuf>,
+) -> anyhow::Result<()> {
+    use crate::bench::{accuracy, skip, throughput};
+    match kind {
+        BenchKind::Accuracy => {
+            let ladder = if a.quick {
+                accuracy::Ladder::Quick
+            } else {
+                a.ladder
+            };
+            let out = out.unwrap_or_else(|| std::path::PathBuf::from("out/accuracy"));
+            accuracy::run(
+                ladder,
+                &fracture_solver::verification::Problem::ALL,
+                &a.families,
+                a.threads,
+                a.cost,
+                &out,
+            )
+            .map(|_| ())
+        }
+        BenchKind::Throughput => throughput::run(
+            &throughput::Options {
+                cell_size: a.cell_size,
+                ppc: a.particles_per_cell,
+                steps: a.steps,
+                warmup: a.warmup,
+                threads: a.thread_counts.clone(),
+                history_every: a.history_every,
+            },
+            out.as_deref(),
+        )
+        .map(|_| ()),
+        BenchKind::Skip => skip::run(
+            &skip::Options {
+                cell_size: a.cell_size,
+                steps: a.steps,
+                warmup: a.warmup,
+                threads: a.threads,
+            },
+            out.as_deref(),
+        )
+        .map(|_| ()),
+        BenchKind::All => anyhow::bail!("bench all runs the others"),
     }
 }

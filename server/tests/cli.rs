@@ -390,3 +390,92 @@ fn ctrl_c_cancels_the_run_and_writes_the_summary() {
     let m = fracture_worker::mcapfile::McapContents::read(out.join("fields.mcap")).unwrap();
     assert!(!m.truncated);
 }
+
+/// `bench accuracy` on the tiny ladder writes its four files with one finite error per run
+/// (a test of the command, not of the errors' size or the timings).
+#[test]
+fn bench_accuracy_tiny_ladder_writes_its_files() {
+    let dir = tempfile::tempdir().unwrap();
+    let out = dir.path().join("acc");
+    let o = fracture(&[
+        "bench",
+        "accuracy",
+        "--ladder",
+        "tiny",
+        "--threads",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    for f in [
+        "accuracy.csv",
+        "accuracy.md",
+        "accuracy.svg",
+        "accuracy.json",
+    ] {
+        assert!(out.join(f).is_file(), "{f} missing");
+    }
+    let csv = std::fs::read_to_string(out.join("accuracy.csv")).unwrap();
+    let header: Vec<&str> = csv.lines().next().unwrap().split(',').collect();
+    let col = |name: &str| header.iter().position(|h| *h == name).unwrap();
+    let (err, wall) = (col("error"), col("wall_seconds"));
+    let rows: Vec<Vec<&str>> = csv
+        .lines()
+        .skip(1)
+        .map(|l| l.split(',').collect())
+        .collect();
+    // Every problem has a row, every row a finite error and a positive wall time.
+    assert!(rows.len() >= 6, "{csv}");
+    for r in &rows {
+        let e: f64 = r[err].parse().unwrap();
+        let w: f64 = r[wall].parse().unwrap();
+        assert!(e.is_finite() && w > 0.0, "row {r:?}");
+    }
+    let svg = std::fs::read_to_string(out.join("accuracy.svg")).unwrap();
+    assert!(svg.starts_with("<svg") && svg.trim_end().ends_with("</svg>"));
+    assert!(stdout(&o).contains("order p"));
+}
+
+/// `bench skip` and the throughput matrix run CI-sized and write their files.
+#[test]
+fn bench_skip_and_throughput_matrix_run_ci_sized() {
+    let dir = tempfile::tempdir().unwrap();
+    let small = [
+        "--cell-size",
+        "0.005",
+        "--steps",
+        "2",
+        "--warmup",
+        "1",
+        "--threads",
+        "1",
+    ];
+    let out = dir.path().join("skip");
+    let mut args = vec!["bench", "skip", "--out", out.to_str().unwrap()];
+    args.extend(small);
+    let o = fracture(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("skip.json")).unwrap()).unwrap();
+    let figs = v["figures"].as_array().unwrap();
+    // Without a crack no crack phase runs and no J is evaluated.
+    assert_eq!(figs[0]["counters"], json!([0, 0, 0, 0, 0]));
+    let out = dir.path().join("tp");
+    let mut args = vec![
+        "bench",
+        "throughput",
+        "--thread-counts",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(small);
+    let o = fracture(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("throughput.json")).unwrap())
+            .unwrap();
+    assert_eq!(v["runs"].as_array().unwrap().len(), 3);
+    assert!(out.join("throughput.csv").is_file());
+}

@@ -150,6 +150,8 @@ pub struct Cracks {
     normal_impulse: Vec<f64>,
     ncx: usize,
     ncy: usize,
+    /// J-integrals evaluated so far (cache misses of `tip_j`): a work counter for benchmarks.
+    j_evaluations: u64,
 }
 
 #[inline(always)]
@@ -257,7 +259,14 @@ impl Cracks {
             normal_impulse: vec![0.0; geom.storage_len()],
             ncx: geom.nx - 1,
             ncy: geom.ny - 1,
+            j_evaluations: 0,
         }
+    }
+
+    /// J-integral evaluations so far (one per tip and distinct sample time; a second request
+    /// at the same time is served from the cache and not counted).
+    pub fn j_evaluations(&self) -> u64 {
+        self.j_evaluations
     }
 
     /// The crack lines (for snapshots), without mouth extensions.
@@ -955,6 +964,7 @@ impl Cracks {
             return TipJ { j };
         }
         let tj = self.compute_j(ci, t, v);
+        self.j_evaluations += 1;
         self.cracks[ci].tips[t].cached_j = Some((time, tj.j));
         tj
     }

@@ -20,4 +20,6 @@ pub mod particles;
 pub mod shape;
 pub mod sim;
 
-pub use sim::{BuildError, Simulation, SolverConfig, StepError, StepStats};
+pub mod verification;
+
+pub use sim::{BuildError, Simulation, SolverConfig, StepError, StepStats, WorkCounters};

@@ -113,6 +113,24 @@ pub struct StepStats {
     pub active_nodes: usize,
 }
 
+/// How often the optional phases of a step ran: cheap counters (incremented once per phase
+/// call, outside the particle and node loops) that show what a scene skips.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct WorkCounters {
+    /// Steps taken.
+    pub steps: u64,
+    /// Crack velocity-field assignments (one per step with cracks, §3).
+    pub crack_field_passes: u64,
+    /// Crack-face contact passes (three per step with cracks, §4).
+    pub contact_passes: u64,
+    /// Crack-surface moves (one per step with cracks, §5).
+    pub surface_moves: u64,
+    /// Propagation checks (one per step with cracks, §7).
+    pub propagation_checks: u64,
+    /// J-integral evaluations (per tip, on a history sample or a growth check, §6).
+    pub j_evaluations: u64,
+}
+
 /// A prescribed-velocity condition resolved to grid nodes.
 #[derive(Debug, Clone)]
 struct BcNodes {
@@ -245,6 +263,7 @@ pub struct Simulation {
     scratch_grad: Vec<[f64; 4]>,
     col_sums: Vec<f64>,
     cracks: Option<Box<Cracks>>,
+    counters: WorkCounters,
 }
 
 impl Simulation {
@@ -400,6 +419,7 @@ impl Simulation {
             col_sums: vec![0.0; geom.cols],
             parts,
             cracks: None,
+            counters: WorkCounters::default(),
         };
         if !scene.cracks.is_empty() {
             sim.slot_of = vec![u32::MAX; storage];
@@ -541,6 +561,7 @@ impl Simulation {
 
         // Crack surfaces move with the grid velocities (§5).
         if let Some(cr) = self.cracks.as_mut() {
+            self.counters.surface_moves += 1;
             cr.move_surfaces(
                 &self.geom,
                 &self.nodes,
@@ -629,6 +650,7 @@ impl Simulation {
         let Some(cr) = self.cracks.as_mut() else {
             return Ok(());
         };
+        self.counters.crack_field_passes += 1;
         cr.assign_fields(
             &self.geom,
             self.shape,
@@ -817,6 +839,7 @@ impl Simulation {
 
     fn contact(&mut self, stage: Stage) {
         if let Some(cr) = self.cracks.as_mut() {
+            self.counters.contact_passes += 1;
             let d = cr.contact(
                 stage,
                 &mut self.nodes,
@@ -833,6 +856,7 @@ impl Simulation {
         let Some(mut cr) = self.cracks.take() else {
             return Ok(false);
         };
+        self.counters.propagation_checks += 1;
         let grew = cr.propagate(&self.view(), self.time);
         self.cracks = Some(cr);
         Ok(grew)
@@ -1416,6 +1440,15 @@ impl Simulation {
     /// The cracks, if the scene has any.
     pub fn cracks(&self) -> Option<&Cracks> {
         self.cracks.as_deref()
+    }
+
+    /// How often the optional (crack) phases have run so far.
+    pub fn work_counters(&self) -> WorkCounters {
+        WorkCounters {
+            steps: self.steps,
+            j_evaluations: self.cracks.as_ref().map_or(0, |c| c.j_evaluations()),
+            ..self.counters
+        }
     }
 
     /// Fields sampled at the grid nodes now: mass-weighted averages of particle values

@@ -4,6 +4,8 @@
 
 mod common;
 use common::*;
+use fracture_solver::SolverConfig;
+use fracture_solver::verification::{self, Settings};
 use serde_json::json;
 
 /// Rigid translation: a body in free flight keeps its momentum exactly (to round-off) and
@@ -50,77 +52,13 @@ fn free_flight_keeps_momentum_and_no_stress() {
 /// Laterally constrained bar under a step traction at one end: the front moves at the
 /// plane-strain c_L, and the particle velocity behind it is σ/(ρ c_L).
 /// Reference: 1D elastic wave; resolution: 1 mm cells, 2×2 particles per cell, cfl 0.5;
-/// tolerance: speed 2 %, velocity 3 % (issue acceptance).
+/// tolerance: speed 2 %, velocity 3 % (issue acceptance). Scene and front tracking:
+/// `verification::wave_bar`, `verification::run_wave_bar`.
 #[test]
 fn constrained_bar_wave_speed_and_particle_velocity() {
-    let h = 0.001;
-    let sigma = 1.0e6;
-    let s = scene(json!({
-        "name": "wave",
-        "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [0.204, 0.006]},
-        "materials": {"m": homalite()},
-        "bodies": [{"material": "m", "region": {"rectangle": {"min": [0.002, 0.002], "max": [0.202, 0.004]}}}],
-        "boundary_conditions": [{"region": {"rectangle": {"min": [0.0, 0.0], "max": [0.204, 0.006]}},
-                                 "velocity": {"y": 0.0}}],
-        "loads": [{"region": {"rectangle": {"min": [0.002, 0.002], "max": [0.0025, 0.004]}},
-                   "traction": [sigma, 0.0]}],
-        "time": {"end": 6.0e-5, "cfl": 0.5}
-    }));
-    let mut sim = sim(&s, 2);
-    let mat = s.materials["m"].wave_speeds(s.analysis);
-    let c_l = mat.c_l;
-    let v_expected = sigma / (1230.0 * c_l);
-    // Front position: where the (x-binned) particle velocity crosses half the plateau.
-    let front = |sim: &fracture_solver::Simulation| -> f64 {
-        let p = sim.particles();
-        let mut pts: Vec<(f64, f64)> = p.kin.iter().map(|k| (k.x[0], k.v[0])).collect();
-        pts.sort_by(|a, b| a.0.partial_cmp(&b.0).unwrap());
-        // Average rows sharing an x (2 particle rows per cell × 2 cells).
-        let mut bins: Vec<(f64, f64, usize)> = Vec::new();
-        for (x, v) in pts {
-            match bins.last_mut() {
-                Some(b) if (b.0 - x).abs() < 1e-9 => {
-                    b.1 += v;
-                    b.2 += 1;
-                }
-                _ => bins.push((x, v, 1)),
-            }
-        }
-        let prof: Vec<(f64, f64)> = bins.iter().map(|b| (b.0, b.1 / b.2 as f64)).collect();
-        // Last crossing from above half to below half, scanning in +x.
-        let half = 0.5 * v_expected;
-        for w in prof.windows(2).rev() {
-            if w[0].1 >= half && w[1].1 < half {
-                return w[0].0 + (half - w[0].1) / (w[1].1 - w[0].1) * (w[1].0 - w[0].0);
-            }
-        }
-        f64::NAN
-    };
-    let (t1, t2) = (1.5e-5, 5.0e-5);
-    let mut x1 = f64::NAN;
-    let mut plateau = f64::NAN;
-    while !sim.is_finished() {
-        sim.step().unwrap();
-        if x1.is_nan() && sim.time() >= t1 {
-            x1 = front(&sim);
-        }
-        if sim.time() >= t2 {
-            break;
-        }
-    }
-    let x2 = front(&sim);
-    let c = (x2 - x1) / (sim.time() - t1);
-    // Plateau: mean velocity of particles between 20 % and 70 % of the distance to the front.
-    let p = sim.particles();
-    let behind: Vec<f64> = p
-        .kin
-        .iter()
-        .filter(|k| k.x[0] > 0.002 + 0.2 * (x2 - 0.002) && k.x[0] < 0.002 + 0.7 * (x2 - 0.002))
-        .map(|k| k.v[0])
-        .collect();
-    if !behind.is_empty() {
-        plateau = behind.iter().sum::<f64>() / behind.len() as f64;
-    }
+    let r = verification::run_wave_bar(&Settings::at(0.001), SolverConfig { threads: 2 }).unwrap();
+    let (c, c_l) = (r.speed, r.c_l);
+    let (plateau, v_expected) = (r.plateau, r.v_expected);
     let c_err = (c - c_l).abs() / c_l;
     let v_err = (plateau - v_expected).abs() / v_expected;
     eprintln!(
@@ -138,53 +76,19 @@ fn constrained_bar_wave_speed_and_particle_velocity() {
 /// Fixed–free vibrating bar (reference-solutions.md): L = 25, E = 100, ρ = 1, v₀ = 0.1,
 /// v(x, 0) = v₀ sin(πx/2L): period 10.000. Resolution: 50 cells along the bar, 2×2
 /// particles per cell, cfl 0.5, GIMP. Tolerance: period 0.5 %, energy kept within 1 % over
-/// 10 periods (issue acceptance).
+/// 10 periods (issue acceptance). Scene and period fit: `verification::run_vibrating_bar`.
 #[test]
 fn vibrating_bar_period_and_energy() {
-    let (l, x0) = (25.0, 1.0);
-    let s = scene(json!({
-        "name": "vibrating-bar",
-        "analysis": "plane_stress",
-        "grid": {"cell_size": 0.5, "min": [0.0, 0.0], "max": [28.0, 3.0]},
-        "materials": {"bar": {"model": "linear_elastic", "density": 1.0, "youngs_modulus": 100.0, "poissons_ratio": 0.0}},
-        "bodies": [{"material": "bar", "region": {"rectangle": {"min": [x0, 1.0], "max": [x0 + l, 2.0]}}}],
-        "boundary_conditions": [{"region": {"rectangle": {"min": [0.9, 0.0], "max": [1.1, 3.0]}}, "velocity": {"x": 0.0}}],
-        "time": {"end": 100.0, "cfl": 0.5}
-    }));
-    let mut sim = sim(&s, 2);
-    let beta = std::f64::consts::PI / (2.0 * l);
-    sim.set_velocities(|x| [0.1 * (beta * (x[0] - x0)).sin(), 0.0]);
-    let e0 = sim.energy();
-    let total0 = e0.kinetic + e0.strain;
-    let mean_v = |sim: &fracture_solver::Simulation| {
-        let p = sim.particles();
-        p.kin
-            .iter()
-            .zip(&p.mech)
-            .map(|(k, m)| m.m * k.v[0])
-            .sum::<f64>()
-    };
-    let mut prev = (sim.time(), mean_v(&sim));
-    let mut crossings = Vec::new();
-    while !sim.is_finished() {
-        sim.step().unwrap();
-        let now = (sim.time(), mean_v(&sim));
-        if prev.1.signum() != now.1.signum() && prev.1 != 0.0 {
-            crossings.push(prev.0 + prev.1 / (prev.1 - now.1) * (now.0 - prev.0));
-        }
-        prev = now;
-    }
-    // Crossings every half period: fit the period over all of them.
-    let n = crossings.len();
+    let r =
+        verification::run_vibrating_bar(&Settings::at(0.5), SolverConfig { threads: 2 }).unwrap();
+    // Crossings every half period: the period is fitted over all of them.
+    let n = r.crossings;
     assert!(n >= 19, "only {n} zero crossings");
-    let period = 2.0 * (crossings[n - 1] - crossings[0]) / (n - 1) as f64;
-    let e1 = sim.energy();
-    let total1 = e1.kinetic + e1.strain;
-    let loss = (total0 - total1) / total0;
+    let (period, loss) = (r.period, r.energy_loss);
     eprintln!(
         "period {period:.5} (10.000), energy change {:.3} % over {:.1} periods",
         100.0 * loss,
-        sim.time() / 10.0
+        r.time / 10.0
     );
     assert!((period - 10.0).abs() / 10.0 < 0.005, "period {period}");
     assert!(loss.abs() < 0.01, "energy changed by {:.3} %", 100.0 * loss);

@@ -4,6 +4,8 @@
 
 mod common;
 use common::*;
+use fracture_solver::SolverConfig;
+use fracture_solver::verification::{self, Settings};
 use serde_json::json;
 
 /// Freund's stationary crack under a plane step tensile wave:
@@ -12,44 +14,16 @@ use serde_json::json;
 /// at mid-height, a step traction σ* on the top edge, bottom edge free. The roller at the
 /// mouth mirrors the crack, so the first scattered waves (from the mirror tip and the far
 /// roller) reach the tip 2·20 mm/c_L = 15.7 µs after t_c. Resolution: 0.5 mm cells, 2×2
-/// particles per cell, cfl 0.5, J contour half-size `contour`.
+/// particles per cell, cfl 0.5, J contour half-size `contour` (`verification::freund`).
 fn freund(contour: u32) -> Vec<(f64, f64, f64)> {
-    let h = 0.0005;
-    let m = 2.0 * h;
-    let (b, below, above) = (0.040, 0.040, 0.030);
-    let yc = m + below + 0.5 * h;
-    let top = yc + above - 0.5 * h;
-    let sigma = 1.0e6;
-    let s = scene(json!({
-        "name": "freund",
-        "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [b + 2.0 * m, top + m]},
-        "materials": {"m": homalite()},
-        "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [m + b, top]}}}],
-        "cracks": [{"points": [[m - 0.5 * h, yc], [m + 0.020, yc]], "j_contour": contour}],
-        "boundary_conditions": [
-            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [m + 0.1 * h, 1.0]}}, "velocity": {"x": 0.0}},
-            {"region": {"rectangle": {"min": [m + b - 0.1 * h, 0.0], "max": [1.0, 1.0]}}, "velocity": {"x": 0.0}}
-        ],
-        "loads": [{"region": {"rectangle": {"min": [0.0, top - 0.5 * h], "max": [1.0, 1.0]}},
-                   "traction": [0.0, sigma]}],
-        "time": {"end": 2.9e-5, "cfl": 0.5}
-    }));
-    let c_l = s.materials["m"].wave_speeds(s.analysis).c_l;
-    let t_c = (top - yc) / c_l;
-    let nu: f64 = 0.34;
-    let mut sim = sim(&s, 0);
-    let mut out = Vec::new();
-    while !sim.is_finished() {
-        sim.step().unwrap();
-        let dt = sim.time() - t_c;
-        if dt > 0.0 {
-            let k_ref = 2.0 * sigma * (c_l * dt * (1.0 - 2.0 * nu) / std::f64::consts::PI).sqrt()
-                / (1.0 - nu);
-            let r = sim.crack_tips()[0];
-            out.push((dt, r.k1, k_ref));
-        }
-    }
-    out
+    let f = verification::freund(&Settings {
+        j_contour: contour,
+        ..Settings::at(0.0005)
+    })
+    .unwrap();
+    verification::freund_series(&f, SolverConfig { threads: 0 })
+        .unwrap()
+        .rows
 }
 
 /// K_I(t) within 5 % of Freund's formula over the valid window, after the first few cells of

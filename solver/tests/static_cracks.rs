@@ -5,65 +5,26 @@
 
 mod common;
 use common::*;
+use fracture_solver::SolverConfig;
+use fracture_solver::verification::{self, Settings};
 use serde_json::json;
-
-/// Tada's centre-crack factor F(a/b).
-fn tada_center(ab: f64) -> f64 {
-    let s = (std::f64::consts::PI * ab / 2.0).cos().recip().sqrt();
-    (1.0 - 0.025 * ab * ab + 0.06 * ab.powi(4)) * s
-}
 
 /// Run a scene to its end and average the crack-tip rows over the last `frac` of the run.
 fn average_tips(s: &fracture_api::Scene, frac: f64) -> Vec<[f64; 4]> {
-    let mut sim = sim(s, 0);
-    let t_avg = (1.0 - frac) * s.time.end;
-    let mut sums: Vec<[f64; 4]> = Vec::new();
-    let mut n = 0.0;
-    while !sim.is_finished() {
-        sim.step().unwrap();
-        if sim.time() >= t_avg {
-            let rows = sim.crack_tips();
-            if sums.is_empty() {
-                sums = vec![[0.0; 4]; rows.len()];
-            }
-            for (s, r) in sums.iter_mut().zip(&rows) {
-                s[0] += r.j1;
-                s[1] += r.j2;
-                s[2] += r.k1;
-                s[3] += r.k2;
-            }
-            n += 1.0;
-        }
-    }
-    sums.iter()
-        .map(|s| [s[0] / n, s[1] / n, s[2] / n, s[3] / n])
-        .collect()
+    verification::average_tips(s, frac, SolverConfig { threads: 0 })
+        .unwrap()
+        .tips
 }
 
+/// The centre-crack scene of `verification::center_crack` (strip 2b = 80 mm, 2a = 17 mm,
+/// σ = 1 MPa ramped over 150 µs, viscous damping) and Tada's K_I.
 fn center_crack_scene(h: f64, contour: u32) -> (fracture_api::Scene, f64) {
-    // Strip 2b = 80 mm wide, 120 mm tall (1.5 × width), crack 2a = 17 mm at mid-cell, so
-    // a/b = 0.2125. Tension σ = 1 MPa on both ends, ramped over 150 µs, viscous damping.
-    let (b, half_h, a) = (0.040, 0.060, 0.0085);
-    let m = 2.0 * h;
-    let cx = m + b;
-    let cy = m + half_h + 0.5 * h;
-    let v = json!({
-        "name": "center-crack",
-        "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [2.0 * b + 2.0 * m, 2.0 * half_h + 2.0 * m + h]},
-        "materials": {"m": homalite()},
-        "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [m + 2.0 * b, m + 2.0 * half_h + h]}}}],
-        "cracks": [{"points": [[cx - a, cy], [cx + a, cy]], "j_contour": contour}],
-        "loads": [
-            {"region": {"rectangle": {"min": [0.0, 2.0 * half_h + m + h - 0.5 * h], "max": [1.0, 1.0]}},
-             "traction": [0.0, 1.0e6], "ramp_time": 1.5e-4},
-            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, m + 0.5 * h]}},
-             "traction": [0.0, -1.0e6], "ramp_time": 1.5e-4}
-        ],
-        "damping": {"kind": "viscous", "coefficient": 4.0e4},
-        "time": {"end": 3.0e-4, "cfl": 0.5}
-    });
-    let k_ref = 1.0e6 * (std::f64::consts::PI * a).sqrt() * tada_center(a / b);
-    (scene(v), k_ref)
+    let b = verification::center_crack(&Settings {
+        j_contour: contour,
+        ..Settings::at(h)
+    })
+    .unwrap();
+    (b.scene, b.reference)
 }
 
 /// Centre crack in a long strip under remote tension: K_I = σ√(πa)·F(a/b) (Tada).
@@ -101,39 +62,13 @@ fn center_crack_path_independence() {
     assert!((j2 - j3).abs() / j2 < 0.03, "J1 {j2} vs {j3}");
 }
 
-/// Tada's edge-crack factor F(a/b).
-fn tada_edge(ab: f64) -> f64 {
-    let pi = std::f64::consts::PI;
-    let x = pi * ab / 2.0;
-    ((2.0 / (pi * ab)) * x.tan()).sqrt() * (0.752 + 2.02 * ab + 0.37 * (1.0 - x.sin()).powi(3))
-        / x.cos()
-}
-
 /// Edge crack in a strip under remote tension: K_I = σ√(πa)·F(a/b) (Tada). Strip b = 40 mm,
 /// half-height 48 mm, a = 12.5 mm (a/b = 0.3125), 1 mm cells, 2×2 particles per cell,
 /// contour half-size 2. Tolerance: 5 %.
 #[test]
 fn edge_crack_mode_one() {
-    let h = 0.001;
-    let (b, half_h, a) = (0.040, 0.048, 0.0125);
-    let m = 2.0 * h;
-    let cy = m + half_h + 0.5 * h;
-    let s = scene(json!({
-        "name": "edge-crack",
-        "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [b + 2.0 * m, 2.0 * half_h + 2.0 * m + h]},
-        "materials": {"m": homalite()},
-        "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [m + b, m + 2.0 * half_h + h]}}}],
-        "cracks": [{"points": [[m - 0.5 * h, cy], [m + a, cy]]}],
-        "loads": [
-            {"region": {"rectangle": {"min": [0.0, 2.0 * half_h + m + 0.5 * h], "max": [1.0, 1.0]}},
-             "traction": [0.0, 1.0e6], "ramp_time": 1.2e-4},
-            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, m + 0.5 * h]}},
-             "traction": [0.0, -1.0e6], "ramp_time": 1.2e-4}
-        ],
-        "damping": {"kind": "viscous", "coefficient": 5.0e4},
-        "time": {"end": 2.4e-4, "cfl": 0.5}
-    }));
-    let k_ref = 1.0e6 * (std::f64::consts::PI * a).sqrt() * tada_edge(a / b);
+    let b = verification::edge_crack(&Settings::at(0.001)).unwrap();
+    let (s, k_ref) = (b.scene, b.reference);
     let tips = average_tips(&s, 0.2);
     assert_eq!(tips.len(), 1, "the mouth is not a tip");
     let t = tips[0];

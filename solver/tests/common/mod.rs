@@ -20,8 +20,7 @@ pub fn sim(s: &Scene, threads: usize) -> Simulation {
 
 /// Homalite-100, dynamic constants (reference-solutions.md).
 pub fn homalite() -> serde_json::Value {
-    serde_json::json!({"model": "linear_elastic", "density": 1230.0,
-        "youngs_modulus": 5.2e9, "poissons_ratio": 0.34})
+    fracture_solver::verification::homalite()
 }
 
 /// Total momentum Σ m v.
