@@ -419,13 +419,14 @@ pub fn edge_crack(s: &Settings) -> Result<Built, VerifyError> {
     })
 }
 
-/// Centre crack a = 8.5 mm in a 121 mm square under pure shear τ = 1 MPa on all four edges,
-/// ramped over 250 µs, viscous damping 6·10⁴ 1/s, to 400 µs (the scene of
-/// `shear-crack.json`). Reference: K_II = τ√(πa).
+/// Centre crack 2a = 34 mm (a = 17 mm, mid-cell) in a 104 mm square under remote shear
+/// τ = 1 MPa, loaded on its four edges by the tractions of the exact infinite-plate solution
+/// ([`westergaard_shear`], constant over one-cell edge segments), so the plate is a cut-out of
+/// the infinite one and the reference needs no finite-size factor. Ramped over 250 µs, viscous
+/// damping 7·10⁴ 1/s, to 400 µs (the scene of `shear-crack.json`). Reference: K_II = τ√(πa).
 pub fn shear_crack(s: &Settings) -> Result<Built, VerifyError> {
     let h = s.cell_size;
-    let lb = s.load_band();
-    let (w, a) = (0.120, 0.0085);
+    let (w, a) = (0.104, 0.017);
     let m = 2.0 * h;
     let c = m + 0.5 * w + 0.5 * h;
     let tau = 1.0e6;
@@ -438,23 +439,81 @@ pub fn shear_crack(s: &Settings) -> Result<Built, VerifyError> {
         "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [top, top]}},
                     "particles_per_cell": s.particles_per_cell}],
         "cracks": [{"points": [[c - a, c], [c + a, c]], "j_contour": s.j_contour}],
-        "loads": [
-            {"region": {"rectangle": {"min": [m + lb, top - lb], "max": [top - lb, top]}},
-             "traction": [tau, 0.0], "ramp_time": 2.5e-4},
-            {"region": {"rectangle": {"min": [m + lb, m], "max": [top - lb, m + lb]}},
-             "traction": [-tau, 0.0], "ramp_time": 2.5e-4},
-            {"region": {"rectangle": {"min": [top - lb, m], "max": [top, top]}},
-             "traction": [0.0, tau], "ramp_time": 2.5e-4},
-            {"region": {"rectangle": {"min": [m, m], "max": [m + lb, top]}},
-             "traction": [0.0, -tau], "ramp_time": 2.5e-4}
-        ],
-        "damping": {"kind": "viscous", "coefficient": 6.0e4},
+        "loads": exact_shear_loads(s, [m, top], c, a, tau, 2.5e-4),
+        "damping": {"kind": "viscous", "coefficient": 7.0e4},
         "time": {"end": 4.0e-4, "cfl": s.cfl}
     });
     Ok(Built {
         scene: to_scene(v)?,
         reference: mode_two_k(tau, a),
     })
+}
+
+/// Complex numbers as (re, im), for the Westergaard function.
+type Complex = (f64, f64);
+
+fn c_mul(a: Complex, b: Complex) -> Complex {
+    (a.0 * b.0 - a.1 * b.1, a.0 * b.1 + a.1 * b.0)
+}
+
+fn c_div(a: Complex, b: Complex) -> Complex {
+    let d = b.0 * b.0 + b.1 * b.1;
+    ((a.0 * b.0 + a.1 * b.1) / d, (a.1 * b.0 - a.0 * b.1) / d)
+}
+
+/// Principal square root (branch cut along the negative real axis).
+fn c_sqrt(a: Complex) -> Complex {
+    let r = a.0.hypot(a.1);
+    let re = (0.5 * (r + a.0)).max(0.0).sqrt();
+    let im = (0.5 * (r - a.0)).max(0.0).sqrt();
+    (re, if a.1 < 0.0 { -im } else { im })
+}
+
+/// Stresses (σ_xx, σ_yy, σ_xy) of a crack (−a, a) on the x axis of an infinite plate under
+/// remote shear τ, at (x, y) from the crack centre (Westergaard, mode II):
+/// Z = τz/√(z² − a²), Z' = −τa²/(z² − a²)^{3/2}, σ_xx = 2 Im Z + y Re Z', σ_yy = −y Re Z',
+/// σ_xy = Re Z − y Im Z'. √(z² − a²) is taken as √(z − a)·√(z + a), which is ≈ z far away
+/// and has its cut on the crack.
+pub fn westergaard_shear(x: f64, y: f64, a: f64, tau: f64) -> [f64; 3] {
+    let q = c_mul(c_sqrt((x - a, y)), c_sqrt((x + a, y)));
+    let z = c_div((tau * x, tau * y), q);
+    let zp = c_div((-tau * a * a, 0.0), c_mul(q, c_mul(q, q)));
+    [2.0 * z.1 + y * zp.0, -y * zp.0, z.0 - y * zp.1]
+}
+
+/// Loads of the square `[lo, hi]²` (crack centre at (c, c)) carrying the tractions of
+/// [`westergaard_shear`] on its edges (t = σ·n), evaluated at the middle of each one-cell edge
+/// segment and held constant over it, on the outermost particle row ([`Settings::load_band`]).
+fn exact_shear_loads(
+    s: &Settings,
+    [lo, hi]: [f64; 2],
+    c: f64,
+    a: f64,
+    tau: f64,
+    ramp: f64,
+) -> Value {
+    let h = s.cell_size;
+    let lb = s.load_band();
+    let n = ((hi - lo) / h).round() as usize;
+    let mut loads = Vec::with_capacity(4 * n);
+    let load = |min: [f64; 2], max: [f64; 2], t: [f64; 2]| json!({"region": {"rectangle": {"min": min, "max": max}}, "traction": t, "ramp_time": ramp});
+    for k in 0..n {
+        let (s0, s1) = (lo + k as f64 * h, lo + (k + 1) as f64 * h);
+        let mid = 0.5 * (s0 + s1) - c;
+        // Top and bottom rows without the corner particles (those belong to the sides).
+        let (x0, x1) = (s0.max(lo + lb), s1.min(hi - lb));
+        if x1 > x0 {
+            let top = westergaard_shear(mid, hi - c, a, tau);
+            let bottom = westergaard_shear(mid, lo - c, a, tau);
+            loads.push(load([x0, hi - lb], [x1, hi], [top[2], top[1]]));
+            loads.push(load([x0, lo], [x1, lo + lb], [-bottom[2], -bottom[1]]));
+        }
+        let right = westergaard_shear(hi - c, mid, a, tau);
+        let left = westergaard_shear(lo - c, mid, a, tau);
+        loads.push(load([hi - lb, s0], [hi, s1], [right[0], right[2]]));
+        loads.push(load([lo, s0], [lo + lb, s1], [-left[0], -left[2]]));
+    }
+    Value::Array(loads)
 }
 
 /// Crack-tip values averaged over the end of a run.
@@ -840,5 +899,25 @@ mod tests {
             };
             assert!(p.build(&coarse).is_ok(), "{p:?} coarse");
         }
+    }
+
+    /// The reference field itself: remote shear far away, traction-free faces, and
+    /// √(2πr)·σ_xy → τ√(πa) ahead of the tip (to 0.1 % at r = 10⁻⁶ a).
+    #[test]
+    fn westergaard_shear_is_the_mode_two_crack_field() {
+        let (a, tau) = (0.017, 1.0e6);
+        let far = westergaard_shear(1.0e3 * a, 7.0e2 * a, a, tau);
+        assert!((far[2] - tau).abs() < 1e-5 * tau && far[0].abs() < 1e-5 * tau);
+        for x in [-0.9 * a, -0.3 * a, 0.5 * a] {
+            let f = westergaard_shear(x, 1e-12 * a, a, tau);
+            assert!(
+                f[1].abs() < 1e-3 * tau && f[2].abs() < 1e-3 * tau,
+                "face {x}: {f:?}"
+            );
+        }
+        let r = 1e-6 * a;
+        let k = (2.0 * PI * r).sqrt() * westergaard_shear(a + r, 0.0, a, tau)[2];
+        let k_ref = mode_two_k(tau, a);
+        assert!((k - k_ref).abs() < 1e-3 * k_ref, "K {k} vs {k_ref}");
     }
 }
