@@ -105,6 +105,23 @@ fn crack_lengths_inside(s: &Scene) -> Vec<f64> {
         .collect()
 }
 
+/// Σ t·length over the loads (x, y) and Σ |t|·length (x, y): each load region is a strip
+/// along an edge, so its length is the longer side of its rectangle.
+fn resultant(s: &Scene) -> [f64; 4] {
+    let mut r = [0.0; 4];
+    for l in &s.loads {
+        let len = match l.region {
+            Region::Rectangle { min, max } => (max[0] - min[0]).max(max[1] - min[1]),
+            _ => panic!("{}: expected rectangular load regions", s.name),
+        };
+        for c in 0..2 {
+            r[c] += l.traction[c] * len;
+            r[c + 2] += l.traction[c].abs() * len;
+        }
+    }
+    r
+}
+
 #[test]
 fn fine_scenes_halve_the_cell_and_keep_the_problem() {
     for name in FINE {
@@ -128,7 +145,23 @@ fn fine_scenes_halve_the_cell_and_keep_the_problem() {
         assert_eq!(coarse.time, fine.time, "{name}");
         assert_eq!(coarse.analysis, fine.analysis, "{name}");
         let tractions = |s: &Scene| s.loads.iter().map(|l| l.traction).collect::<Vec<_>>();
-        assert_eq!(tractions(&coarse), tractions(&fine), "{name}");
+        if coarse.loads.len() == fine.loads.len() {
+            assert_eq!(tractions(&coarse), tractions(&fine), "{name}");
+        } else {
+            // Edge tractions sampled per cell (shear-crack: the exact infinite-plate field):
+            // the fine scene samples the same field twice as often, so the resultant of each
+            // component agrees to the midpoint rule's error.
+            let (rc, rf) = (resultant(&coarse), resultant(&fine));
+            for c in 0..2 {
+                let scale = rc[c + 2].max(1e-12);
+                assert!(
+                    (rc[c] - rf[c]).abs() < 1e-2 * scale,
+                    "{name}: resultant {c} {} vs {}",
+                    rc[c],
+                    rf[c]
+                );
+            }
+        }
         for (a, b) in coarse.cracks.iter().zip(&fine.cracks) {
             assert_eq!(a.contact, b.contact, "{name}");
             assert_eq!(a.propagation, b.propagation, "{name}");
