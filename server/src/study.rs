@@ -353,8 +353,9 @@ fn sweeps(a: &StudyArgs) -> Vec<Sweep> {
     // The acceptance test's reduced scene (tests/tests/rosakis_sweep.rs), at its own 30 µs.
     out.push(Sweep {
         id: "toughness-mini",
-        title: "Toughness on the reduced scene of the acceptance test (25 m/s, frictionless, 30 µs)"
-            .into(),
+        title:
+            "Toughness on the reduced scene of the acceptance test (25 m/s, frictionless, 30 µs)"
+                .into(),
         scene: a.mini.clone(),
         end: Some(3.0e-5),
         runs: [25.0, 100.0, 250.0]
@@ -398,7 +399,11 @@ fn rosakis(a: &StudyArgs) -> anyhow::Result<()> {
             done += 1;
             let key = v.key(&sw.scene.display().to_string());
             if results.contains_key(&key) {
-                println!("[{done}/{total}] {} {}: same run as before", sw.id, v.label());
+                println!(
+                    "[{done}/{total}] {} {}: same run as before",
+                    sw.id,
+                    v.label()
+                );
                 continue;
             }
             let scene = variant_scene(base, v, sw.end.unwrap_or(a.end))
@@ -476,7 +481,9 @@ impl Report<'_> {
                     .iter()
                     .filter(|p| p[0] > t0 + 1.0e-5)
                     .map(|p| p[1])
-                    .fold(None, |acc: Option<f64>, v| Some(acc.map_or(v, |a| a.max(v))))
+                    .fold(None, |acc: Option<f64>, v| {
+                        Some(acc.map_or(v, |a| a.max(v)))
+                    })
                     .filter(|_| end > t0 + 1.0e-5),
             ),
             None => (None, None),
@@ -574,7 +581,8 @@ impl Report<'_> {
                     v.j_ic,
                     v.mu,
                     m.status,
-                    m.initiation().map_or(String::new(), |t| format!("{:.2}", t * 1e6)),
+                    m.initiation()
+                        .map_or(String::new(), |t| format!("{:.2}", t * 1e6)),
                     means
                         .iter()
                         .map(|s| s.map_or(String::new(), |s| format!("{s:.1}")))
@@ -717,7 +725,12 @@ impl Report<'_> {
              from the numbers by the rule stated in each row.\n",
             self.a.window * 1e6
         );
-        let _ = writeln!(md, "### {} ({})\n", self.a.scene.display(), "all four sweeps");
+        let _ = writeln!(
+            md,
+            "### {} ({})\n",
+            self.a.scene.display(),
+            "all four sweeps"
+        );
         self.claims_for(md, "");
         if let Some(fine) = &self.a.fine {
             let _ = writeln!(md, "\n### {} (all four sweeps)\n", fine.display());
@@ -734,7 +747,10 @@ impl Report<'_> {
             let pts: Vec<(f64, Option<f64>)> = sw
                 .runs
                 .iter()
-                .filter_map(|v| self.get(sw, v).map(|m| (v.v, self.mean_after_init(m, 2.0e-5))))
+                .filter_map(|v| {
+                    self.get(sw, v)
+                        .map(|m| (v.v, self.mean_after_init(m, 2.0e-5)))
+                })
                 .collect();
             let vals: Vec<f64> = pts.iter().filter_map(|p| p.1).collect();
             let rises = vals.len() == pts.len()
@@ -759,11 +775,14 @@ impl Report<'_> {
                     ))
                     .collect::<Vec<_>>()
                     .join("; "),
-                verdict(rises && saturates && near, &[
-                    (rises, "rises"),
-                    (saturates, "saturates"),
-                    (near, "near 1600 m/s"),
-                ])
+                verdict(
+                    rises && saturates && near,
+                    &[
+                        (rises, "rises"),
+                        (saturates, "saturates"),
+                        (near, "near 1600 m/s"),
+                    ]
+                )
             );
             // 2. Slow-down near 20 µs.
             if let Some(m) = sw
@@ -774,7 +793,9 @@ impl Report<'_> {
             {
                 let (t_dip, drop) = slow_down(m, self.a.window);
                 let init = m.initiation().unwrap_or(0.0);
-                let ok = t_dip.is_some_and(|t| (t - init - 2.0e-5).abs() < 7.0e-6 || (t - 2.0e-5).abs() < 7.0e-6);
+                let ok = t_dip.is_some_and(|t| {
+                    (t - init - 2.0e-5).abs() < 7.0e-6 || (t - 2.0e-5).abs() < 7.0e-6
+                });
                 let _ = writeln!(
                     md,
                     "| \"Break-point\" slow-down or arrest near t = 20 µs (J_Ic = 25, 25 m/s) | first fall of the moving-box speed by ≥ 30 % from its running peak; agrees if within 7 µs of 20 µs after impact or after initiation | {} | {} |",
@@ -794,10 +815,14 @@ impl Report<'_> {
             let pts: Vec<(f64, Option<f64>)> = sw
                 .runs
                 .iter()
-                .filter_map(|v| self.get(sw, v).map(|m| (v.j_ic, self.mean_after_init(m, 3.0e-5))))
+                .filter_map(|v| {
+                    self.get(sw, v)
+                        .map(|m| (v.j_ic, self.mean_after_init(m, 3.0e-5)))
+                })
                 .collect();
             let vals: Vec<f64> = pts.iter().filter_map(|p| p.1).collect();
-            let falls = vals.len() == pts.len() && vals.len() >= 2 && vals.windows(2).all(|w| w[1] < w[0]);
+            let falls =
+                vals.len() == pts.len() && vals.len() >= 2 && vals.windows(2).all(|w| w[1] < w[0]);
             let _ = writeln!(
                 md,
                 "| Higher J_Ic is slower (25 m/s, frictionless) | mean speed over 30 µs after initiation falls strictly with J_Ic | {} | {} |",
@@ -829,7 +854,7 @@ impl Report<'_> {
             }
         }
         // 5. Friction delays and slows the crack, mostly at low impact speed.
-        let fr = |id: &str| -> Option<Vec<(f64, Option<f64>, Option<f64>)>> {
+        let fr = |id: &str| -> Option<Vec<FrictionRow>> {
             let sw = self.sweep(id)?;
             Some(
                 sw.runs
@@ -841,8 +866,11 @@ impl Report<'_> {
                     .collect(),
             )
         };
-        if let (Some(fast), Some(slow)) = (fr(&format!("friction{suffix}")), fr(&format!("friction-slow{suffix}"))) {
-            let effect = |rows: &[(f64, Option<f64>, Option<f64>)]| -> (f64, f64) {
+        if let (Some(fast), Some(slow)) = (
+            fr(&format!("friction{suffix}")),
+            fr(&format!("friction-slow{suffix}")),
+        ) {
+            let effect = |rows: &[FrictionRow]| -> (f64, f64) {
                 // Delay (s) and relative slow-down of μ = 0.3 against μ = 0.
                 let (Some(a), Some(b)) = (rows.first(), rows.last()) else {
                     return (0.0, 0.0);
@@ -864,7 +892,7 @@ impl Report<'_> {
             let delays = d_fast > 0.0 || d_slow > 0.0;
             let slows = s_fast > 0.0 || s_slow > 0.0;
             let mostly_low = d_slow >= d_fast && s_slow >= s_fast;
-            let show = |rows: &[(f64, Option<f64>, Option<f64>)]| {
+            let show = |rows: &[FrictionRow]| {
                 rows.iter()
                     .map(|(mu, t, s)| {
                         format!(
@@ -881,11 +909,14 @@ impl Report<'_> {
                 "| Friction delays and slows the crack, mostly at low impact speed (J_Ic = 250) | μ = 0.3 against μ = 0: later initiation and lower mean speed over 30 µs after initiation; both effects larger at 15 m/s than at 25 m/s | 25 m/s: {}; 15 m/s: {} | {} |",
                 show(&fast),
                 show(&slow),
-                verdict(delays && slows && mostly_low, &[
-                    (delays, "delays"),
-                    (slows, "slows"),
-                    (mostly_low, "mostly at low speed"),
-                ])
+                verdict(
+                    delays && slows && mostly_low,
+                    &[
+                        (delays, "delays"),
+                        (slows, "slows"),
+                        (mostly_low, "mostly at low speed"),
+                    ]
+                )
             );
         }
         // Never faster than c_L, always on the bond.
@@ -894,7 +925,7 @@ impl Report<'_> {
         for sw in self
             .sweeps
             .iter()
-            .filter(|sw| sw.id.ends_with("-fine") == !suffix.is_empty() && sw.end.is_none())
+            .filter(|sw| sw.id.ends_with("-fine") != suffix.is_empty() && sw.end.is_none())
         {
             for v in &sw.runs {
                 if let Some(m) = self.get(sw, v) {
@@ -944,6 +975,9 @@ impl Report<'_> {
     }
 }
 
+/// One run of a friction sweep: μ, initiation time (s), mean speed after initiation (m/s).
+type FrictionRow = (f64, Option<f64>, Option<f64>);
+
 /// "agrees", or "differs: …" listing the parts that failed.
 fn verdict(all: bool, parts: &[(bool, &str)]) -> String {
     if all {
@@ -977,7 +1011,12 @@ fn slow_down(m: &Measured, w: f64) -> (Option<f64>, f64) {
 }
 
 /// Speed against time, one line per run, with the wave speeds as dashed reference lines.
-fn speed_plot(title: &str, series: &[(String, Vec<[f64; 2]>)], s: &WaveSpeeds, t_end_us: f64) -> String {
+fn speed_plot(
+    title: &str,
+    series: &[(String, Vec<[f64; 2]>)],
+    s: &WaveSpeeds,
+    t_end_us: f64,
+) -> String {
     const W: f64 = 720.0;
     const H: f64 = 420.0;
     const L: f64 = 64.0;
@@ -1056,7 +1095,9 @@ fn speed_plot(title: &str, series: &[(String, Vec<[f64; 2]>)], s: &WaveSpeeds, t
             y = py(val)
         );
     }
-    const COLOURS: [&str; 6] = ["#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf"];
+    const COLOURS: [&str; 6] = [
+        "#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#17becf",
+    ];
     for (i, (name, pts)) in series.iter().enumerate() {
         let c = COLOURS[i % COLOURS.len()];
         let mut d = String::new();
@@ -1091,7 +1132,9 @@ fn speed_plot(title: &str, series: &[(String, Vec<[f64; 2]>)], s: &WaveSpeeds, t
 }
 
 fn xml(s: &str) -> String {
-    s.replace('&', "&amp;").replace('<', "&lt;").replace('>', "&gt;")
+    s.replace('&', "&amp;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
 }
 
 #[cfg(test)]
