@@ -725,12 +725,7 @@ impl Report<'_> {
              from the numbers by the rule stated in each row.\n",
             self.a.window * 1e6
         );
-        let _ = writeln!(
-            md,
-            "### {} ({})\n",
-            self.a.scene.display(),
-            "all four sweeps"
-        );
+        let _ = writeln!(md, "### {} (all four sweeps)\n", self.a.scene.display());
         self.claims_for(md, "");
         if let Some(fine) = &self.a.fine {
             let _ = writeln!(md, "\n### {} (all four sweeps)\n", fine.display());
