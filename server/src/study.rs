@@ -965,7 +965,26 @@ impl Report<'_> {
              - The impact is idealised as a prescribed edge velocity over the pulse; the experiment's projectile \
              and the seed's loading may differ in the pulse shape and in what the edge does after the pulse.\n\
              - The seed's growth rule lets a growing tip advance at c_L per step and relies on the box average; \
-             the speed is therefore an average of runs at c_L and pauses, as the seed's slides say.\n"
+             the speed is therefore an average of runs at c_L and pauses, as the seed's slides say.\n\n\
+             ## Reading the differing rows\n\n\
+             These are interpretations, not measurements; each says what would test it.\n\n\
+             - **The slow-down time.** Here the first large fall of the speed comes some 40 µs after impact. \
+             The compressive wave from the struck patch reflects from the lower edge and comes back to the bond \
+             as tension, cutting the shear drive: the bond is about 63 mm from the lower edge, so the reflection \
+             reaches the bond about 2 × 63 mm / c_L ≈ 49 µs after impact near the struck edge, and somewhat \
+             earlier where the wave front arrives obliquely. The seed's own first runs used a block about a \
+             quarter of the experiment's size, where this reflection comes about twice as early, near 20 µs. \
+             A run on a taller block would move our slow-down later if this reading is right.\n\
+             - **The transition case (J_Ic = 250).** The early speed here is near c_R to c_S and the crack \
+             then speeds up, as in the seed, but its later speed stays nearer 1.1–1.2 c_S than the seed's \
+             1800 m/s (≈ √2·c_S). The late phase follows the reflected waves of this block and the end of the \
+             30 µs pulse, which depend on how the impact is modelled.\n\
+             - **Friction.** Friction can only act where the crack faces press together. The notch and the \
+             new crack lie on the bond between the loaded lower half and the quiet upper half, and the faces \
+             are pressed together only where the compressive pulse crosses them, so the friction force, and \
+             its effect, grows with the impact speed here; initiation happens at the notch tip before any face \
+             behind it slides, so its time does not change with μ. The seed saw the larger effect at low impact \
+             speed; a scene whose notch faces are precompressed would be needed to compare that part.\n"
         );
     }
 }
