@@ -150,9 +150,13 @@ struct Measured {
     t: Vec<f64>,
     len: Vec<f64>,
     y: Vec<f64>,
+    x: Vec<f64>,
     speed: Vec<f64>,
     /// Fringe snapshots at [`FRINGE_TIMES`].
     fringes: Vec<Snapshot>,
+    /// Largest distance (m) of the tip from the bond's material line: the tip's y against the
+    /// initial bond y plus the material's y displacement at the tip, at every snapshot.
+    off_material: f64,
 }
 
 impl Measured {
@@ -198,10 +202,39 @@ impl Measured {
             })
             .collect()
     }
-    /// Largest distance of the tip from the bond line y0 (m).
-    fn off_bond(&self, y0: f64) -> f64 {
+    /// Largest distance of the tip from the initial bond line (m): the first tip sample is
+    /// on the bond.
+    fn off_bond(&self) -> f64 {
+        let y0 = self.y.first().copied().unwrap_or(0.0);
         self.y.iter().map(|y| (y - y0).abs()).fold(0.0, f64::max)
     }
+}
+
+/// Mean y displacement (m) of the material on the bond at the tip: the nodes within one cell
+/// of (x_tip, y_bond) in x and 1.5 cells in y, both sides of the bond.
+fn bond_displacement(snap: &Snapshot, x_tip: f64, y_bond: f64) -> Option<f64> {
+    let uy = snap.component("uy")?;
+    let h = snap.cell_size;
+    let (nx, ny) = (snap.nx as usize, snap.ny as usize);
+    let (mut sum, mut n) = (0.0, 0.0);
+    for iy in 0..ny {
+        let y = snap.origin[1] + iy as f64 * h;
+        if (y - y_bond).abs() > 1.5 * h {
+            continue;
+        }
+        for ix in 0..nx {
+            let x = snap.origin[0] + ix as f64 * h;
+            if (x - x_tip).abs() > h {
+                continue;
+            }
+            let v = f64::from(*uy.values.get(iy * nx + ix)?);
+            if v.is_finite() {
+                sum += v;
+                n += 1.0;
+            }
+        }
+    }
+    (n > 0.0).then(|| sum / n)
 }
 
 /// The sink of a study run: keeps the tip of the first crack and the fringe snapshots.
@@ -222,11 +255,18 @@ impl RunSink for Collect {
             self.m.t.push(r.time);
             self.m.len.push(r.length);
             self.m.y.push(r.y);
+            self.m.x.push(r.x);
             self.m.speed.push(r.speed);
         }
         Ok(())
     }
     fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError> {
+        if let (Some(&y_tip), Some(&y0), Some(&x_tip)) =
+            (self.m.y.last(), self.m.y.first(), self.m.x.last())
+            && let Some(uy) = bond_displacement(snap, x_tip, y0)
+        {
+            self.m.off_material = self.m.off_material.max((y_tip - y0 - uy).abs());
+        }
         if FRINGE_TIMES
             .iter()
             .any(|&t| (snap.time - t).abs() < 0.25e-6)
@@ -256,7 +296,7 @@ fn variant_scene(base: &Value, v: &Variant, end: f64) -> anyhow::Result<Scene> {
     set_path(&mut doc, "time.end", json!(end))?;
     set_path(&mut doc, "output.history_interval", json!(1.0e-7))?;
     set_path(&mut doc, "output.snapshot_interval", json!(5.0e-6))?;
-    set_path(&mut doc, "output.fields", json!(["fringe"]))?;
+    set_path(&mut doc, "output.fields", json!(["fringe", "displacement"]))?;
     let scene = scene_from_value(doc).map_err(|e| anyhow::anyhow!("{e}"))?;
     validate_scene(&scene).map_err(|e| anyhow::anyhow!("{e}"))?;
     Ok(scene)
@@ -274,8 +314,10 @@ fn run_one(scene: &Scene, threads: usize) -> Measured {
             t: Vec::new(),
             len: Vec::new(),
             y: Vec::new(),
+            x: Vec::new(),
             speed: Vec::new(),
             fringes: Vec::new(),
+            off_material: 0.0,
         },
     };
     let opts = RunOptions {
@@ -429,19 +471,15 @@ fn rosakis(a: &StudyArgs) -> anyhow::Result<()> {
         .next()
         .map(|m| m.wave_speeds(scene0.analysis))
         .context("the base scene has no material")?;
-    let bond = scene0
-        .cracks
-        .first()
-        .and_then(|c| c.points.last())
-        .map(|p| p[1])
-        .context("the base scene has no crack")?;
     let report = Report {
         a,
         sweeps: &sweeps,
         results: &results,
         speeds,
-        bond,
         figs: &figs,
+        load: std::fs::read_to_string("/proc/loadavg")
+            .ok()
+            .and_then(|l| l.split_whitespace().next().map(str::to_string)),
     };
     report.write()
 }
@@ -452,8 +490,9 @@ struct Report<'a> {
     sweeps: &'a [Sweep],
     results: &'a HashMap<String, Measured>,
     speeds: WaveSpeeds,
-    bond: f64,
     figs: &'a Path,
+    /// 1-minute load average when the runs had finished (Linux), for the timings' context.
+    load: Option<String>,
 }
 
 /// Speed in m/s with v/c_S and v/c_R.
@@ -493,7 +532,7 @@ impl Report<'_> {
     fn write(&self) -> anyhow::Result<()> {
         let mut md = String::new();
         let mut csv = String::from(
-            "sweep,v_m_s,j_ic,mu,status,initiation_us,mean_speed_10_20us,mean_speed_20_30us,mean_speed_30_40us,mean_speed_40_50us,mean_speed_50_60us,mean_speed_60_70us,mean_speed_70_80us,growth_mm,max_off_bond_mm,wall_s,particle_steps_per_s,steps,particles\n",
+            "sweep,v_m_s,j_ic,mu,status,initiation_us,mean_speed_10_20us,mean_speed_20_30us,mean_speed_30_40us,mean_speed_40_50us,mean_speed_50_60us,mean_speed_60_70us,mean_speed_70_80us,growth_mm,max_off_bond_mm,max_off_material_line_mm,wall_s,particle_steps_per_s,steps,particles\n",
         );
         let mut series_csv = String::from("sweep,v_m_s,j_ic,mu,time_us,box_speed_m_s\n");
         self.header(&mut md);
@@ -575,7 +614,7 @@ impl Report<'_> {
                 );
                 let _ = writeln!(
                     csv,
-                    "{},{},{},{},{:?},{},{},{:.3},{:.3},{},{:.3},{}",
+                    "{},{},{},{},{:?},{},{},{:.3},{:.3},{:.3},{},{:.3},{}",
                     sw.id,
                     v.v,
                     v.j_ic,
@@ -589,7 +628,8 @@ impl Report<'_> {
                         .collect::<Vec<_>>()
                         .join(","),
                     growth * 1e3,
-                    m.off_bond(self.bond) * 1e3,
+                    m.off_bond() * 1e3,
+                    m.off_material * 1e3,
                     format_args!("{:.2}", m.wall),
                     m.psps,
                     format_args!("{},{}", m.steps, m.particles)
@@ -917,6 +957,7 @@ impl Report<'_> {
         // Never faster than c_L, always on the bond.
         let mut fastest: f64 = 0.0;
         let mut off: f64 = 0.0;
+        let mut raw: f64 = 0.0;
         for sw in self
             .sweeps
             .iter()
@@ -925,17 +966,19 @@ impl Report<'_> {
             for v in &sw.runs {
                 if let Some(m) = self.get(sw, v) {
                     fastest = m.speed.iter().copied().fold(fastest, f64::max);
-                    off = off.max(m.off_bond(self.bond));
+                    off = off.max(m.off_material);
+                    raw = raw.max(m.off_bond());
                 }
             }
         }
         let _ = writeln!(
             md,
-            "| (method) the tip never outruns c_L; the crack runs along the bond | largest tip speed of the solver (1 µs moving box, `crack_tips.csv` `speed`) ≤ 1.02 c_L (a growing tip advances c_L·Δt per step and also moves with the material); tip within 1 mm of the bond line (the crack line moves with the material, and the impact displaces the lower half by about half a millimetre) | {:.0} m/s ({:.3} c_L); {:.3} mm | {} |",
+            "| (method) the tip never outruns c_L; the crack runs along the bond | largest tip speed of the solver (1 µs moving box, `crack_tips.csv` `speed`) ≤ 1.02 c_L (a growing tip advances c_L·Δt per step and also moves with the material); tip within 0.5 mm of the bond's material line (the crack line moves with the material, so the tip's y is compared with the initial bond y plus the material's y displacement at the tip, every 5 µs); the largest distance from the initial bond line is shown too | {:.0} m/s ({:.3} c_L); {:.3} mm from the material line ({:.3} mm from the initial line) | {} |",
             fastest,
             fastest / s.c_l,
             off * 1e3,
-            if fastest <= 1.02 * s.c_l && off < 1e-3 {
+            raw * 1e3,
+            if fastest <= 1.02 * s.c_l && off < 0.5e-3 {
                 "holds"
             } else {
                 "fails"
@@ -953,7 +996,8 @@ impl Report<'_> {
         let _ = writeln!(
             md,
             "\n## Run cost\n\n\
-             Wall time and particle-steps/s of every run are in the sweep tables above and in `rosakis/runs.csv`. \
+             Wall time and particle-steps/s of every run are in the sweep tables above and in `rosakis/runs.csv` \
+             (2-core machine; 1-minute load average {} when the last run had finished). \
              The seed's longest runs took up to 3 hours serial (its conclusions slide); the cohesive-zone AMR runs it \
              compares with, about 48 hours.\n\n\
              ## Why results can differ from the seed\n\n\
@@ -984,7 +1028,8 @@ impl Report<'_> {
              are pressed together only where the compressive pulse crosses them, so the friction force, and \
              its effect, grows with the impact speed here; initiation happens at the notch tip before any face \
              behind it slides, so its time does not change with μ. The seed saw the larger effect at low impact \
-             speed; a scene whose notch faces are precompressed would be needed to compare that part.\n"
+             speed; a scene whose notch faces are precompressed would be needed to compare that part.\n",
+            self.load.as_deref().unwrap_or("unknown")
         );
     }
 }
@@ -1167,8 +1212,10 @@ mod tests {
             t,
             len,
             y: vec![0.0; n],
+            x: vec![0.0; n],
             speed: vec![0.0; n],
             fringes: Vec::new(),
+            off_material: 0.0,
         }
     }
 
