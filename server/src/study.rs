@@ -1012,23 +1012,10 @@ impl Report<'_> {
              the speed is therefore an average of runs at c_L and pauses, as the seed's slides say.\n\n\
              ## Reading the differing rows\n\n\
              These are interpretations, not measurements; each says what would test it.\n\n\
-             - **The slow-down time.** Here the first large fall of the speed comes some 40 µs after impact. \
-             The compressive wave from the struck patch reflects from the lower edge and comes back to the bond \
-             as tension, cutting the shear drive: the bond is about 63 mm from the lower edge, so the reflection \
-             reaches the bond about 2 × 63 mm / c_L ≈ 49 µs after impact near the struck edge, and somewhat \
-             earlier where the wave front arrives obliquely. The seed's own first runs used a block about a \
-             quarter of the experiment's size, where this reflection comes about twice as early, near 20 µs. \
-             A run on a taller block would move our slow-down later if this reading is right.\n\
-             - **The transition case (J_Ic = 250).** The early speed here is near c_R to c_S and the crack \
-             then speeds up, as in the seed, but its later speed stays nearer 1.1–1.2 c_S than the seed's \
-             1800 m/s (≈ √2·c_S). The late phase follows the reflected waves of this block and the end of the \
-             30 µs pulse, which depend on how the impact is modelled.\n\
-             - **Friction.** Friction can only act where the crack faces press together. The notch and the \
-             new crack lie on the bond between the loaded lower half and the quiet upper half, and the faces \
-             are pressed together only where the compressive pulse crosses them, so the friction force, and \
-             its effect, grows with the impact speed here; initiation happens at the notch tip before any face \
-             behind it slides, so its time does not change with μ. The seed saw the larger effect at low impact \
-             speed; a scene whose notch faces are precompressed would be needed to compare that part.\n",
+             - **The slow-down time.** On the coarse scene the first large fall of the speed comes about 40 µs after impact; on the fine scene about 30 µs after impact, 20 µs after initiation, as in the seed. One candidate for the coarse timing: the compressive wave from the struck patch reflects from the lower edge and returns to the bond as tension, cutting the shear drive; the bond is about 63 mm from the lower edge, so that reflection reaches the bond about 2 × 63 mm / c_L ≈ 49 µs after impact near the struck edge, earlier where the front arrives obliquely. A run on a taller block would move a reflection-driven slow-down later.\n\
+             - **The transition case (J_Ic = 250).** The crack starts slower and then speeds up, as in the seed, but its later speed stays near 1.2–1.3 c_S rather than the seed's 1800 m/s (≈ √2·c_S), and its early speed depends on the cell size (compare the two tables). The late phase follows the reflected waves of this block and the end of the 30 µs pulse, which depend on how the impact is modelled.\n\
+             - **Friction.** Friction can only act where the crack faces press together: the notch and the new crack lie on the bond between the loaded lower half and the quiet upper half, and the faces are pressed together only where the compressive pulse crosses them. Initiation happens at the notch tip before the faces behind it slide, so its time barely moves with μ. The slow-down by μ = 0.3 is a few per cent at both impact speeds, and which speed shows more of it differs between the two cell sizes, so this project does not resolve the seed's \"mostly at low impact speed\"; a scene with precompressed notch faces would be needed to compare that part.\n\
+             - **Cell size.** The speeds are not converged in the cell size: at 0.5 mm (the seed's cells) the J_Ic = 25 crack saturates near 1250 m/s, at 1 mm near 1560 m/s (first rows of the two tables), and the tip drifts further from the bond's material line at 0.5 mm (the last rows). The seed reports saturation near 1600 m/s at 0.5 mm. The growth rule (c_L·Δt per growing step, segments of at least h/2) and the J contour (2 cells) both scale with h, which is where a cell-size dependence would come from.\n",
             self.load.as_deref().unwrap_or("unknown")
         );
     }
