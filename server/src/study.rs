@@ -23,6 +23,8 @@ use fracture_server::sweep::set_path;
 use fracture_worker::{Control, RunOptions, RunSink, SinkError, run_scene};
 use serde_json::{Value, json};
 
+use crate::bench::svg::escape;
+
 /// Arguments of `fracture study`.
 #[derive(clap::Args, Debug)]
 pub struct StudyArgs {
@@ -1082,7 +1084,7 @@ fn speed_plot(
         o,
         r#"<text x="{}" y="20" text-anchor="middle" font-size="14">{}</text>"#,
         (L + W - R) / 2.0,
-        xml(title)
+        escape(title)
     );
     // Axes and ticks.
     let _ = writeln!(
@@ -1170,17 +1172,11 @@ fn speed_plot(
             W - R + 30.0,
             W - R + 34.0,
             y + 4.0,
-            xml(name)
+            escape(name)
         );
     }
     o.push_str("</svg>\n");
     o
-}
-
-fn xml(s: &str) -> String {
-    s.replace('&', "&amp;")
-        .replace('<', "&lt;")
-        .replace('>', "&gt;")
 }
 
 #[cfg(test)]

@@ -334,6 +334,20 @@ fn csv(rows: &[Row]) -> String {
     s
 }
 
+/// The settings columns of a run (problem, family, h, a/h, ppc, cfl, shape, contour).
+fn settings_cells(r: &Row) -> Vec<String> {
+    vec![
+        r.problem.into(),
+        r.family.into(),
+        format!("{:e}", r.cell_size),
+        sig(r.cells_across, 3),
+        r.ppc.to_string(),
+        r.cfl.to_string(),
+        r.shape.into(),
+        r.contour.to_string(),
+    ]
+}
+
 fn pct(x: f64) -> String {
     if x.is_finite() {
         format!("{:+.2} %", 100.0 * x)
@@ -404,19 +418,13 @@ fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize, cos
         let rs: Vec<&Row> = rows.iter().filter(|r| r.problem == p.name()).collect();
         for i in pareto(&rs, cost) {
             let r = rs[i];
-            front_rows.push(vec![
-                r.problem.into(),
-                r.family.into(),
-                format!("{:e}", r.cell_size),
-                sig(r.cells_across, 3),
-                r.ppc.to_string(),
-                r.cfl.to_string(),
-                r.shape.into(),
-                r.contour.to_string(),
+            let mut row = settings_cells(r);
+            row.extend([
                 format!("{:.2}", r.wall_seconds),
                 format!("{:.2}", r.cpu_seconds),
                 pct(r.error),
             ]);
+            front_rows.push(row);
         }
     }
     s.push_str(&markdown_table(
@@ -430,15 +438,8 @@ fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize, cos
     let all: Vec<Vec<String>> = rows
         .iter()
         .map(|r| {
-            vec![
-                r.problem.into(),
-                r.family.into(),
-                format!("{:e}", r.cell_size),
-                sig(r.cells_across, 3),
-                r.ppc.to_string(),
-                r.cfl.to_string(),
-                r.shape.into(),
-                r.contour.to_string(),
+            let mut row = settings_cells(r);
+            row.extend([
                 r.particles.to_string(),
                 r.steps.to_string(),
                 format!("{:.2}", r.wall_seconds),
@@ -448,7 +449,8 @@ fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize, cos
                 pct(r.error),
                 pct(r.worst),
                 r.failure.clone(),
-            ]
+            ]);
+            row
         })
         .collect();
     s.push_str(&markdown_table(

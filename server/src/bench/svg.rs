@@ -25,7 +25,8 @@ fn colour(f: Family) -> &'static str {
     }
 }
 
-fn escape(s: &str) -> String {
+/// Escape text for SVG/XML content.
+pub fn escape(s: &str) -> String {
     s.replace('&', "&amp;")
         .replace('<', "&lt;")
         .replace('>', "&gt;")
