@@ -45,14 +45,22 @@ pub struct CrackPoint {
     pub above: [f64; 2],
     /// Surface on the right.
     pub below: [f64; 2],
+    /// Where the crack line's material point at this crack point sits in the undeformed body
+    /// (the scene's coordinates): the point itself for the scene's points, the reference
+    /// position the growth chose for grown ones.
+    pub x0: [f64; 2],
 }
 
 impl CrackPoint {
     fn at(x: [f64; 2]) -> Self {
+        CrackPoint::grown(x, x)
+    }
+    fn grown(x: [f64; 2], x0: [f64; 2]) -> Self {
         CrackPoint {
             x,
             above: x,
             below: x,
+            x0,
         }
     }
 }
@@ -195,6 +203,30 @@ fn seg_normal(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
     let d = sub(b, a);
     let l = norm(d).max(1e-300);
     [d[1] / l, -d[0] / l]
+}
+
+/// The material displacement at x: the field-0 nodal displacement Σ S m (x_p − X_p)
+/// divided by the mass, interpolated bilinearly (mass-weighted) over the 4 nodes of x's cell;
+/// None outside the grid or where no node of the cell carries mass.
+fn displacement_at(v: &View<'_>, x: [f64; 2]) -> Option<[f64; 2]> {
+    let xi = v.geom.xi(x);
+    let (cx, cy) = (xi[0].floor(), xi[1].floor());
+    if cx < 0.0 || cy < 0.0 || cx as usize + 1 >= v.geom.nx || cy as usize + 1 >= v.geom.ny {
+        return None;
+    }
+    let (fx, fy) = (xi[0] - cx, xi[1] - cy);
+    let (cx, cy) = (cx as usize, cy as usize);
+    let (mut m, mut u) = (0.0, [0.0; 2]);
+    for (a, wa) in [(0, 1.0 - fx), (1, fx)] {
+        for (b, wb) in [(0, 1.0 - fy), (1, fy)] {
+            let n = &v.nodes[v.geom.index(cx + a, cy + b)];
+            let s = wa * wb;
+            m += s * n.m;
+            u[0] += s * n.u[0];
+            u[1] += s * n.u[1];
+        }
+    }
+    (m > 0.0).then(|| [u[0] / m, u[1] / m])
 }
 
 impl Cracks {
@@ -1152,7 +1184,31 @@ impl Cracks {
                 if g < toughness || !g.is_finite() {
                     continue;
                 }
-                let new = [tip[0] + step_len * dir[0], tip[1] + step_len * dir[1]];
+                let (tip_i, prev_i) = {
+                    let n = self.cracks[ci].pts.len();
+                    if t == 0 { (0, 1) } else { (n - 1, n - 2) }
+                };
+                let tip0 = self.cracks[ci].pts[tip_i].x0;
+                let ahead = [tip[0] + step_len * dir[0], tip[1] + step_len * dir[1]];
+                let ahead0 = [tip0[0] + step_len * dir[0], tip0[1] + step_len * dir[1]];
+                let new = match direction {
+                    // A fixed direction is a line of the undeformed body (a bond, a weak
+                    // plane): the new tip is where the material point a step ahead of the
+                    // tip's material point along it is now, X + u(X), with u the nodal
+                    // displacement field (two fixed-point passes from the straight guess).
+                    // Growing straight in the current configuration instead lets the tip
+                    // walk off a sheared bond by step × ∂u_n/∂s per growth step.
+                    GrowthDirection::Fixed(_) => {
+                        let mut x = ahead;
+                        for _ in 0..2 {
+                            if let Some(u) = displacement_at(v, x) {
+                                x = [ahead0[0] + u[0], ahead0[1] + u[1]];
+                            }
+                        }
+                        x
+                    }
+                    GrowthDirection::MaxEnergyRelease => ahead,
+                };
                 // Material ahead? If not, the crack has cut through: it becomes a mouth.
                 let xi = v.geom.xi(new);
                 let (ix, iy) = (xi[0].round(), xi[1].round());
@@ -1162,8 +1218,6 @@ impl Cracks {
                     && (iy as usize) + 1 < v.geom.ny
                     && v.nodes[v.geom.index(ix as usize, iy as usize)].m > 0.0;
                 let c = &mut self.cracks[ci];
-                let n = c.pts.len();
-                let (tip_i, prev_i) = if t == 0 { (0, 1) } else { (n - 1, n - 2) };
                 if !has_material {
                     let e = 2.0 * self.h;
                     let out = [new[0] + e * dir[0], new[1] + e * dir[1]];
@@ -1178,12 +1232,13 @@ impl Cracks {
                 }
                 // Keep segments at least h/2: extend a short tip segment instead of adding.
                 let short = dist(c.pts[tip_i].x, c.pts[prev_i].x) < 0.5 * self.h * (1.0 - 1e-9);
+                let point = CrackPoint::grown(new, ahead0);
                 if short {
-                    c.pts[tip_i] = CrackPoint::at(new);
+                    c.pts[tip_i] = point;
                 } else if t == 0 {
-                    c.pts.insert(0, CrackPoint::at(new));
+                    c.pts.insert(0, point);
                 } else {
-                    c.pts.push(CrackPoint::at(new));
+                    c.pts.push(point);
                 }
                 c.tips[t].advance += step_len;
                 c.tips[t].released += g * step_len;

@@ -199,7 +199,8 @@ impl Problem {
     /// a crack. For the vibrating bar and the wave the resolution is cells along the bar.
     pub fn length_scale(self) -> f64 {
         match self {
-            Problem::CenterCrack | Problem::ShearCrack => 0.0085,
+            Problem::CenterCrack => 0.0085,
+            Problem::ShearCrack => 0.017,
             Problem::EdgeCrack => 0.0125,
             Problem::Freund => 0.020,
             Problem::VibratingBar => 25.0,
