@@ -224,21 +224,38 @@ pub fn sweep_body(
     body
 }
 
+/// A JSON file the command line names; an unreadable or invalid file is reported on stderr
+/// and gives exit code 2.
+fn read_json_file(path: &std::path::Path) -> Result<serde_json::Value, ExitCode> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        eprintln!("cannot read {}: {e}", path.display());
+        ExitCode::from(2)
+    })?;
+    serde_json::from_str(&text).map_err(|e| {
+        eprintln!("{} is not valid JSON: {e}", path.display());
+        ExitCode::from(2)
+    })
+}
+
+/// `--label key=value` arguments as a JSON object; a malformed one is reported on stderr and
+/// gives exit code 2.
+fn parse_labels(args: &[String]) -> Result<serde_json::Map<String, serde_json::Value>, ExitCode> {
+    let mut labels = serde_json::Map::new();
+    for l in args {
+        let Some((k, v)) = l.split_once('=') else {
+            eprintln!("--label must be key=value, got `{l}`");
+            return Err(ExitCode::from(2));
+        };
+        labels.insert(k.to_string(), serde_json::Value::String(v.to_string()));
+    }
+    Ok(labels)
+}
+
 /// `fracture sweep`.
 pub fn sweep(a: SweepArgs) -> ExitCode {
-    let text = match std::fs::read_to_string(&a.scene) {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!("cannot read {}: {e}", a.scene.display());
-            return ExitCode::from(2);
-        }
-    };
-    let doc: serde_json::Value = match serde_json::from_str(&text) {
+    let doc = match read_json_file(&a.scene) {
         Ok(v) => v,
-        Err(e) => {
-            eprintln!("{} is not valid JSON: {e}", a.scene.display());
-            return ExitCode::from(2);
-        }
+        Err(code) => return code,
     };
     let scene = match doc.get("scene") {
         Some(s) if doc.get("grid").is_none() => s.clone(),
@@ -254,14 +271,10 @@ pub fn sweep(a: SweepArgs) -> ExitCode {
             }
         }
     }
-    let mut labels = serde_json::Map::new();
-    for l in &a.labels {
-        let Some((k, v)) = l.split_once('=') else {
-            eprintln!("--label must be key=value, got `{l}`");
-            return ExitCode::from(2);
-        };
-        labels.insert(k.to_string(), serde_json::Value::String(v.to_string()));
-    }
+    let labels = match parse_labels(&a.labels) {
+        Ok(l) => l,
+        Err(code) => return code,
+    };
     let cfg = client::SweepConfig {
         server: a.server,
         token: a.token,
@@ -583,29 +596,15 @@ pub fn worker(a: WorkerArgs) -> ExitCode {
 
 /// `fracture submit`.
 pub fn submit(a: SubmitArgs) -> ExitCode {
-    let text = match std::fs::read_to_string(&a.scene) {
-        Ok(t) => t,
-        Err(e) => {
-            eprintln!("cannot read {}: {e}", a.scene.display());
-            return ExitCode::from(2);
-        }
-    };
-    let mut body: serde_json::Value = match serde_json::from_str(&text) {
+    let mut body = match read_json_file(&a.scene) {
         Ok(v) => v,
-        Err(e) => {
-            eprintln!("{} is not valid JSON: {e}", a.scene.display());
-            return ExitCode::from(2);
-        }
+        Err(code) => return code,
     };
     if a.priority.is_some() || !a.labels.is_empty() {
-        let mut labels = serde_json::Map::new();
-        for l in &a.labels {
-            let Some((k, v)) = l.split_once('=') else {
-                eprintln!("--label must be key=value, got `{l}`");
-                return ExitCode::from(2);
-            };
-            labels.insert(k.to_string(), serde_json::Value::String(v.to_string()));
-        }
+        let labels = match parse_labels(&a.labels) {
+            Ok(l) => l,
+            Err(code) => return code,
+        };
         let scene = match body.get("scene") {
             Some(s) if body.get("grid").is_none() => s.clone(),
             _ => body,

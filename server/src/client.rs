@@ -431,23 +431,34 @@ fn show_error(status: u16, body: &str) -> String {
     }
 }
 
-/// Submit a scene and, with `wait`, follow its events (falling back to polling) until it ends.
-pub fn submit(cfg: &SubmitConfig, out: &mut dyn Write) -> anyhow::Result<SubmitOutcome> {
-    let base = cfg.server.trim_end_matches('/').to_string();
-    let http = http_client()?;
-    let mut req = http.post(format!("{base}/api/v1/jobs")).json(&cfg.body);
-    if let Some(t) = &cfg.token {
-        req = req.bearer_auth(t);
-    }
+/// Send a create request (with the bearer token, if any): the body of a `201 Created` answer,
+/// or the status and a readable error for any other answer.
+fn post_created(
+    req: reqwest::blocking::RequestBuilder,
+    token: Option<&str>,
+) -> anyhow::Result<Result<String, (u16, String)>> {
+    let req = match token {
+        Some(t) => req.bearer_auth(t),
+        None => req,
+    };
     let r = req.timeout(Duration::from_secs(60)).send()?;
     let status = r.status();
     let text = r.text()?;
     if status != StatusCode::CREATED {
-        return Ok(SubmitOutcome::Rejected(
-            status.as_u16(),
-            show_error(status.as_u16(), &text),
-        ));
+        return Ok(Err((status.as_u16(), show_error(status.as_u16(), &text))));
     }
+    Ok(Ok(text))
+}
+
+/// Submit a scene and, with `wait`, follow its events (falling back to polling) until it ends.
+pub fn submit(cfg: &SubmitConfig, out: &mut dyn Write) -> anyhow::Result<SubmitOutcome> {
+    let base = cfg.server.trim_end_matches('/').to_string();
+    let http = http_client()?;
+    let req = http.post(format!("{base}/api/v1/jobs")).json(&cfg.body);
+    let text = match post_created(req, cfg.token.as_deref())? {
+        Ok(text) => text,
+        Err((code, msg)) => return Ok(SubmitOutcome::Rejected(code, msg)),
+    };
     let job: JobInfo = serde_json::from_str(&text)?;
     writeln!(out, "{}", job.id)?;
     if !cfg.wait {
@@ -579,22 +590,14 @@ pub fn sweep(cfg: &SweepConfig, out: &mut dyn Write) -> anyhow::Result<SweepOutc
     use crate::sweep::SweepInfo;
     let base = cfg.server.trim_end_matches('/').to_string();
     let http = http_client()?;
-    let mut req = http
+    let req = http
         .post(format!("{base}/api/v1/sweeps"))
         .header(reqwest::header::CONTENT_TYPE, "application/json")
         .body(cfg.body.clone());
-    if let Some(t) = &cfg.token {
-        req = req.bearer_auth(t);
-    }
-    let r = req.timeout(Duration::from_secs(60)).send()?;
-    let status = r.status();
-    let text = r.text()?;
-    if status != StatusCode::CREATED {
-        return Ok(SweepOutcome::Rejected(
-            status.as_u16(),
-            show_error(status.as_u16(), &text),
-        ));
-    }
+    let text = match post_created(req, cfg.token.as_deref())? {
+        Ok(text) => text,
+        Err((code, msg)) => return Ok(SweepOutcome::Rejected(code, msg)),
+    };
     let sweep: SweepInfo = serde_json::from_str(&text)?;
     writeln!(out, "{}", sweep.id)?;
     for j in sweep.jobs.iter().flatten() {

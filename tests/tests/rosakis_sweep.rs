@@ -224,38 +224,29 @@ fn sweep_command_errors_and_sweep_cancel_through_the_service() {
         std::path::Path::new(env!("CARGO_MANIFEST_DIR")).join("../scenes/rosakis-shear-mini.json");
     let dir = tempfile::tempdir().expect("tmp");
     let s = Server::start(dir.path(), &["--workers", "2", "--worker-threads", "1"]);
-    let out = Command::new(fracture_bin())
-        .args([
-            "sweep",
-            scene_path.to_str().expect("path"),
-            "--param",
-            "cracks.0.propagation.toughness=25,-1",
-            "--server",
-            &s.url,
-        ])
-        .output()
-        .expect("run fracture sweep");
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    let refused = |param: &str| {
+        let out = Command::new(fracture_bin())
+            .args([
+                "sweep",
+                scene_path.to_str().expect("path"),
+                "--param",
+                param,
+                "--server",
+                &s.url,
+            ])
+            .output()
+            .expect("run fracture sweep");
+        assert_eq!(out.status.code(), Some(2), "{out:?}");
+        String::from_utf8_lossy(&out.stderr).into_owned()
+    };
+    let err = refused("cracks.0.propagation.toughness=25,-1");
     assert!(
         err.contains("invalid_sweep")
             && err.contains("parameter `cracks.0.propagation.toughness` = -1")
             && err.contains("\n  cracks.0.propagation.toughness: "),
         "{err}"
     );
-    let out = Command::new(fracture_bin())
-        .args([
-            "sweep",
-            scene_path.to_str().expect("path"),
-            "--param",
-            "cracks.0.propagation.tougness=25",
-            "--server",
-            &s.url,
-        ])
-        .output()
-        .expect("run fracture sweep");
-    let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{out:?}");
+    let err = refused("cracks.0.propagation.tougness=25");
     // The last segment may add a key (optional fields), so the validator catches the typo
     // and the error still names the parameter.
     assert!(
