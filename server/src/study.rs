@@ -197,6 +197,16 @@ impl Measured {
             .find(|(_, l)| **l > l0 + 1.0e-5)
             .map(|(t, _)| *t)
     }
+    /// The initiation time for tables: "12.3 µs", or "none".
+    fn initiation_label(&self) -> String {
+        self.initiation()
+            .map_or("none".to_string(), |t| format!("{:.1} µs", t * 1e6))
+    }
+    /// Mean tip speed from initiation to the end of the run (m/s), if the crack grew.
+    fn mean_to_end(&self) -> Option<f64> {
+        let t0 = self.initiation()?;
+        self.mean_speed(t0, self.t.last().copied().unwrap_or(t0))
+    }
     /// Crack length at time `t` (linear interpolation, clamped).
     fn length_at(&self, t: f64) -> f64 {
         match self.t.iter().position(|&x| x >= t) {
@@ -622,9 +632,7 @@ impl Report<'_> {
                     .map(|(a, b)| m.mean_speed(a * 1e-6, b * 1e-6))
                     .collect();
                 let growth = m.len.last().unwrap_or(&0.0) - m.len.first().unwrap_or(&0.0);
-                let init = m
-                    .initiation()
-                    .map_or("none".to_string(), |t| format!("{:.1} µs", t * 1e6));
+                let init = m.initiation_label();
                 let status = if m.status == RunStatus::Completed {
                     String::new()
                 } else {
@@ -634,9 +642,7 @@ impl Report<'_> {
                         m.message.clone().unwrap_or_default()
                     )
                 };
-                let to_end = m
-                    .initiation()
-                    .and_then(|t0| m.mean_speed(t0, m.t.last().copied().unwrap_or(t0)));
+                let to_end = m.mean_to_end();
                 let vmax = m.speed.iter().copied().fold(0.0, f64::max);
                 let _ = writeln!(
                     md,
@@ -1073,9 +1079,7 @@ impl Report<'_> {
                 };
                 let Some(m) = self.get(sw, v) else { continue };
                 let (early, late) = self.early_late(m);
-                let to_end = m
-                    .initiation()
-                    .and_then(|t0| m.mean_speed(t0, m.t.last().copied().unwrap_or(t0)));
+                let to_end = m.mean_to_end();
                 if let Some(e) = to_end {
                     to_ends.push((cells.clone(), e));
                 }
@@ -1083,8 +1087,7 @@ impl Report<'_> {
                 let _ = writeln!(
                     md,
                     "| {j_ic} J/m² | {cells} | {} | {} | {} | {} | {:.3} mm |",
-                    m.initiation()
-                        .map_or("none".to_string(), |t| format!("{:.1} µs", t * 1e6)),
+                    m.initiation_label(),
                     f(early),
                     f(to_end),
                     f(late),

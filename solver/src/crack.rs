@@ -205,28 +205,47 @@ fn seg_normal(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
     [d[1] / l, -d[0] / l]
 }
 
-/// The material displacement at x: the field-0 nodal displacement Σ S m (x_p − X_p)
-/// divided by the mass, interpolated bilinearly (mass-weighted) over the 4 nodes of x's cell;
-/// None outside the grid or where no node of the cell carries mass.
-fn displacement_at(v: &View<'_>, x: [f64; 2]) -> Option<[f64; 2]> {
-    let xi = v.geom.xi(x);
+/// A mass-weighted nodal average at x: Σ S q(n) / Σ S m over the 4 nodes of x's cell (bilinear
+/// S) that `node` gives and that carry mass. None outside the grid or where no such node has
+/// mass.
+fn mass_weighted_at<'n>(
+    geom: &GridGeom,
+    x: [f64; 2],
+    node: impl Fn(usize, usize) -> Option<&'n Node>,
+    q: impl Fn(&Node) -> [f64; 2],
+) -> Option<[f64; 2]> {
+    let xi = geom.xi(x);
     let (cx, cy) = (xi[0].floor(), xi[1].floor());
-    if cx < 0.0 || cy < 0.0 || cx as usize + 1 >= v.geom.nx || cy as usize + 1 >= v.geom.ny {
+    if cx < 0.0 || cy < 0.0 || cx as usize + 1 >= geom.nx || cy as usize + 1 >= geom.ny {
         return None;
     }
     let (fx, fy) = (xi[0] - cx, xi[1] - cy);
     let (cx, cy) = (cx as usize, cy as usize);
-    let (mut m, mut u) = (0.0, [0.0; 2]);
+    let (mut m, mut sum) = (0.0, [0.0; 2]);
     for (a, wa) in [(0, 1.0 - fx), (1, fx)] {
         for (b, wb) in [(0, 1.0 - fy), (1, fy)] {
-            let n = &v.nodes[v.geom.index(cx + a, cy + b)];
-            let s = wa * wb;
-            m += s * n.m;
-            u[0] += s * n.u[0];
-            u[1] += s * n.u[1];
+            if let Some(n) = node(cx + a, cy + b)
+                && n.m > 0.0
+            {
+                let (s, qn) = (wa * wb, q(n));
+                m += s * n.m;
+                sum[0] += s * qn[0];
+                sum[1] += s * qn[1];
+            }
         }
     }
-    (m > 0.0).then(|| [u[0] / m, u[1] / m])
+    (m > 0.0).then(|| [sum[0] / m, sum[1] / m])
+}
+
+/// The material displacement at x: the field-0 nodal displacement Σ S m (x_p − X_p) over the
+/// mass, mass-weighted over x's cell.
+fn displacement_at(v: &View<'_>, x: [f64; 2]) -> Option<[f64; 2]> {
+    mass_weighted_at(
+        v.geom,
+        x,
+        |ix, iy| Some(&v.nodes[v.geom.index(ix, iy)]),
+        |n| n.u,
+    )
 }
 
 impl Cracks {
@@ -686,29 +705,13 @@ impl Cracks {
         f1: &[Node],
         slot_of: &[u32],
     ) -> Option<[f64; 2]> {
-        let xi = geom.xi(x);
-        let (cx, cy) = (xi[0].floor(), xi[1].floor());
-        if cx < 0.0 || cy < 0.0 || cx as usize + 1 >= geom.nx || cy as usize + 1 >= geom.ny {
-            return None;
-        }
-        let (fx, fy) = (xi[0] - cx, xi[1] - cy);
-        let (cx, cy) = (cx as usize, cy as usize);
-        let mut wm = 0.0;
-        let mut p = [0.0; 2];
-        for (a, wa) in [(0, 1.0 - fx), (1, fx)] {
-            for (b, wb) in [(0, 1.0 - fy), (1, fy)] {
-                let s = wa * wb;
-                if let Some(n) = self.side_node(geom, from, cx + a, cy + b, nodes, f1, slot_of)
-                    && n.m > 0.0
-                {
-                    // Σ S m v = Σ S q.
-                    wm += s * n.m;
-                    p[0] += s * n.q[0];
-                    p[1] += s * n.q[1];
-                }
-            }
-        }
-        (wm > 0.0).then(|| [p[0] / wm, p[1] / wm])
+        // Σ S m v = Σ S q.
+        mass_weighted_at(
+            geom,
+            x,
+            |ix, iy| self.side_node(geom, from, ix, iy, nodes, f1, slot_of),
+            |n| n.q,
+        )
     }
 
     /// Move the crack surfaces and lines with the grid velocities (§5).
