@@ -102,12 +102,15 @@ pub fn gimp_weights_1d(xi: f64, l: f64, q: f64) -> Weights1 {
 #[inline(always)]
 fn gimp_1d(cell: f64, icell: i32, xi: f64, l: f64, q: f64) -> Weights1 {
     let f = xi - cell;
-    // A particle in the left half of its cell reaches nodes cell−1 … cell+1, in the right
-    // half cell … cell+2 (l ≤ ½ means it never reaches both). With u the offset from the
-    // middle node (|u| ≤ ½), the outer weights are the GIMP branches written out for that
-    // range, and the middle weight follows from Σ S = 1 (equal to the branch formula: see
+    // A particle reaches node cell−1 only when f < l and node cell+2 only when f > 1 − l
+    // (l ≤ ½ means never both). The stencil starts at cell−1 in the first case and at cell
+    // otherwise, so a particle that reaches only two nodes (l ≤ f ≤ 1 − l) has them first and
+    // its empty node last: the hot loops skip the last column and row when their weight is 0
+    // (`empty_column`, `stencil_rows`). With u the offset from the middle node (|u| < 1),
+    // the outer weights are the GIMP branches written out for that range, and the middle
+    // weight follows from Σ S = 1 (equal to the branch formula: see
     // `fast_weights_match_reference`).
-    let (base, u) = if f < 0.5 {
+    let (base, u) = if f < l {
         (icell - 1, f)
     } else {
         (icell, f - 1.0)
@@ -233,6 +236,24 @@ mod tests {
                 prop_assert!((w.s[k] - s).abs() < 1e-12, "S node {k}: {} vs {s}", w.s[k]);
                 prop_assert!((w.ds[k] - ds).abs() < 1e-12, "S' node {k}: {} vs {ds}", w.ds[k]);
             }
+        }
+
+        // The stencil holds every node the particle reaches, its first node always carries
+        // weight, and only its last node can be empty (the hot loops skip an empty last
+        // column and row, so a two-node particle must have its empty node last).
+        #[test]
+        fn stencil_holds_every_reached_node_empty_last(xi in 1.0f64..60.0, ppc in 1u32..5) {
+            let l = 0.5 / ppc as f64;
+            let w = weights_1d(ShapeFunction::Gimp, xi, l);
+            for outside in [w.base - 1, w.base + 3] {
+                let (s, ds) = gimp(xi - outside as f64, l);
+                prop_assert!(s == 0.0 && ds == 0.0, "node {outside} outside the stencil has S = {s}");
+            }
+            prop_assert!(w.s[0] > 0.0, "first node empty at xi = {xi}, l = {l}");
+            prop_assert!(w.s[1] > 0.0, "middle node empty at xi = {xi}, l = {l}");
+            let f = xi - xi.floor();
+            let reached = if f < l || f > 1.0 - l { 3 } else { 2 };
+            prop_assert_eq!(w.s.iter().filter(|&&s| s > 0.0).count(), reached, "xi = {}, l = {}", xi, l);
         }
     }
 

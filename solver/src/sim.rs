@@ -989,8 +989,18 @@ fn stress_apply(
 /// as in `visit_stencil`.
 #[inline(always)]
 fn empty_column(w: &Weights2, a: usize) -> bool {
-    // GIMP: the middle column always has weight, and S = 0 implies S' = 0.
-    a != 1 && w.x.s[a] == 0.0
+    // GIMP: only the last column can be empty (the stencil base rule of `shape::gimp_1d`),
+    // and S = 0 implies S' = 0.
+    a == 2 && w.x.s[2] == 0.0
+}
+
+/// Whether the last stencil row of GIMP weights `w` is empty (a particle whose domain lies
+/// inside one cell row): row `b` is skipped, as in `visit_stencil`, when `b == 2` and this
+/// holds. The kernels test `b == 2 && last` inside their fixed 3-row loops, which the
+/// compiler unrolls, so only the third row carries the branch.
+#[inline(always)]
+fn last_row_empty(w: &Weights2) -> bool {
+    w.y.s[2] == 0.0
 }
 
 /// ∇S (cell units) of the 3×3 stencil, `[a][b]` as `Weights2::g`.
@@ -1009,11 +1019,15 @@ fn stencil_grads(w: &Weights2) -> [[[f64; 2]; 3]; 3] {
 #[inline(always)]
 fn gather_l(cols: &[&mut [Node; 3]; 3], w: &Weights2, gr: &[[[f64; 2]; 3]; 3]) -> [[f64; 2]; 2] {
     let mut l = [[0.0; 2]; 2];
+    let last = last_row_empty(w);
     for a in 0..3 {
         if empty_column(w, a) {
             continue;
         }
         for b in 0..3 {
+            if b == 2 && last {
+                break;
+            }
             let (v, g) = (cols[a][b].v, gr[a][b]);
             l[0][0] += v[0] * g[0];
             l[0][1] += v[0] * g[1];
@@ -1091,11 +1105,15 @@ impl Simulation {
                 let mv = [m * k.v[0], m * k.v[1]];
                 if gimp && mask == 0 {
                     let cols = field0_columns(&mut g, &geom, w);
+                    let last = last_row_empty(w);
                     for (a, col) in cols.into_iter().enumerate() {
                         if empty_column(w, a) {
                             continue;
                         }
-                        for (n, &sy) in col.iter_mut().zip(&w.y.s) {
+                        for (b, (n, &sy)) in col.iter_mut().zip(&w.y.s).enumerate() {
+                            if b == 2 && last {
+                                break;
+                            }
                             let s = w.x.s[a] * sy;
                             n.m += s * m;
                             n.p[0] += s * mv[0];
@@ -1166,11 +1184,15 @@ impl Simulation {
                         first_fail(&mut acc, first + i, FAIL_STRESS);
                     }
                     let s = *s;
+                    let last = last_row_empty(w);
                     for (a, col) in cols.into_iter().enumerate() {
                         if empty_column(w, a) {
                             continue;
                         }
                         for (b, n) in col.iter_mut().enumerate() {
+                            if b == 2 && last {
+                                break;
+                            }
                             let g = gr[a][b];
                             let fi = [
                                 -vs * (s[0] * g[0] + s[2] * g[1]),
@@ -1245,13 +1267,17 @@ impl Simulation {
                         vbar[c] += sh * n.v[c] + 0.5 * dt * an;
                     }
                 };
+                let last = last_row_empty(w);
                 if fast {
                     let cols = field0_columns(&mut g, &geom, w);
                     for (a, col) in cols.iter().enumerate() {
                         if empty_column(w, a) {
                             continue;
                         }
-                        for (n, &sy) in col.iter().zip(&w.y.s) {
+                        for (b, (n, &sy)) in col.iter().zip(&w.y.s).enumerate() {
+                            if b == 2 && last {
+                                break;
+                            }
                             gather(w.x.s[a] * sy, n);
                         }
                     }
@@ -1296,7 +1322,10 @@ impl Simulation {
                         if empty_column(w, a) {
                             continue;
                         }
-                        for (n, &sy) in col.iter_mut().zip(&w.y.s) {
+                        for (b, (n, &sy)) in col.iter_mut().zip(&w.y.s).enumerate() {
+                            if b == 2 && last {
+                                break;
+                            }
                             let sh = w.x.s[a] * sy;
                             n.q[0] += sh * mv[0];
                             n.q[1] += sh * mv[1];
