@@ -6,13 +6,19 @@
 //! * [`results`]: the rows and files a run produces (`run-output.md`): energy and crack-tip
 //!   history rows, field snapshots, the run summary.
 //! * [`jobs`]: job states and the request/response types of the HTTP API (`api.md`).
+//! * [`sweep`]: parameter sweeps (request, combinations, labels).
+//! * [`protocol`]: the worker protocol (`/api/v1/worker/…`).
+//! * [`nan`]: NaN as JSON `null` in history rows.
 //!
 //! This crate does no IO and knows nothing of HTTP or SQL.
 
 pub mod jobs;
 pub mod lattice;
+pub mod nan;
+pub mod protocol;
 pub mod results;
 pub mod scene;
+pub mod sweep;
 pub mod validate;
 
 pub use scene::Scene;

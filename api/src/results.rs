@@ -9,20 +9,33 @@ pub const ENERGY_CSV_HEADER: &str = "time,kinetic,strain,external_work,dissipate
 /// Column header of `crack_tips.csv`.
 pub const CRACK_TIPS_CSV_HEADER: &str = "time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing";
 
-/// One energy sample (J per the scene's thickness).
+/// One energy sample (J per the scene's thickness). Every number may be NaN (written as
+/// JSON `null`, read back as NaN: [`crate::nan`]).
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 pub struct EnergyRow {
     /// Simulated time (s).
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub time: f64,
     /// Kinetic energy Σ ½ m |v|².
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub kinetic: f64,
     /// Strain energy Σ V W.
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub strain: f64,
     /// Work done on the body by boundary conditions and loads.
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub external_work: f64,
     /// Energy removed by friction, damping and crack growth.
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub dissipated: f64,
     /// kinetic + strain + dissipated − external_work − initial total.
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub total_error: f64,
 }
 
@@ -41,30 +54,49 @@ impl EnergyRow {
     }
 }
 
-/// One crack-tip sample.
+/// One crack-tip sample. A number not defined for this sample (a K of an intersonic tip, a J
+/// whose domain left the grid) is NaN, written as JSON `null` and read back as NaN.
 #[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 pub struct CrackTipRow {
     /// Simulated time (s).
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub time: f64,
     /// Index into `scene.cracks`.
     pub crack: u32,
     /// 0 for the start of the polyline, 1 for its end.
     pub tip: u32,
     /// Tip position x (m).
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub x: f64,
     /// Tip position y (m).
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub y: f64,
     /// Current crack length along its path (m).
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub length: f64,
     /// Tip speed (m/s), moving-box average over `output.speed_window`.
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub speed: f64,
     /// J along the crack (J/m²), tip frame.
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub j1: f64,
     /// J normal to the crack (J/m²), positive to the crack's left.
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub j2: f64,
     /// Mode I stress intensity factor (Pa·√m).
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub k1: f64,
     /// Mode II stress intensity factor (Pa·√m).
+    #[serde(deserialize_with = "crate::nan::f64_or_nan")]
+    #[schemars(with = "Option<f64>")]
     pub k2: f64,
     /// Whether the tip advanced in this sample's step.
     pub growing: bool,

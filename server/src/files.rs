@@ -7,7 +7,7 @@ use std::path::{Path, PathBuf};
 use std::sync::{Arc, Mutex, MutexGuard};
 
 use fracture_api::results::{CrackTipRow, EnergyRow, Snapshot};
-use fracture_worker::mcapfile::McapWriter;
+use fracture_results::mcapfile::McapWriter;
 
 /// The results folders and open MCAP writers.
 pub struct JobFiles {

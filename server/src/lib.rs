@@ -5,23 +5,22 @@
 //!   binary serves and what the unit tests drive with `tower::ServiceExt::oneshot`.
 //! * [`store`] owns the SQLite database (jobs, the queue with leases and fencing tokens,
 //!   history rows and snapshots); [`files`] owns each job's MCAP file. The server is the
-//!   one writer of both; workers talk HTTP only ([`protocol`], [`client`]).
-//! * [`cli`] has the `serve`, `worker` and `submit` commands.
+//!   one writer of both; workers talk HTTP only (`fracture_api::protocol`).
+//! * [`service`] is `fracture serve`: the process around the router (store, reaper, local
+//!   worker processes, graceful shutdown).
+//!
+//! The crate runs no physics and does not depend on the solver or the worker: local workers
+//! are child processes of the `fracture` binary.
 
 pub mod assets;
-pub mod cli;
-pub mod client;
-pub mod codec;
 pub mod config;
 pub mod error;
 pub mod events;
 pub mod files;
-pub mod protocol;
-pub mod render;
 pub mod routes;
 pub mod server;
+pub mod service;
 pub mod store;
-pub mod sweep;
 
 pub use config::Config;
 pub use error::ApiError;

@@ -23,17 +23,17 @@ use utoipa_axum::router::OpenApiRouter;
 use utoipa_axum::routes;
 use utoipa_swagger_ui::SwaggerUi;
 
-use crate::codec;
 use crate::error::{ApiError, ApiJson, BodyLimit, RawBody, parse_json};
 use crate::events::JobEvent;
 use crate::files::Record;
-use crate::protocol::{
-    Claim, ClaimRequest, CrackTipBatch, EnergyBatch, FinishRequest, Heartbeat, HeartbeatReply,
-};
-use crate::render;
 use crate::server::{AppState, new_job_id};
 use crate::store::{JobRow, ListFilter, NewJob, NewSweep, NewSweepJob, StoreError, SweepRow};
-use crate::sweep::{self, SweepInfo, SweepJob, SweepParameter, SweepRequest};
+use fracture_api::protocol::{
+    Claim, ClaimRequest, CrackTipBatch, EnergyBatch, FinishRequest, Heartbeat, HeartbeatReply,
+};
+use fracture_api::sweep::{self, SweepInfo, SweepJob, SweepParameter, SweepRequest};
+use fracture_results::codec;
+use fracture_results::render;
 
 impl From<StoreError> for ApiError {
     fn from(e: StoreError) -> Self {
@@ -1249,7 +1249,7 @@ async fn worker_energy(
     ApiJson(b): ApiJson<EnergyBatch>,
 ) -> Result<StatusCode, ApiError> {
     require_worker_token(&st, &headers)?;
-    let rows: Vec<EnergyRow> = b.rows.into_iter().map(Into::into).collect();
+    let rows: Vec<EnergyRow> = b.rows;
     st.store
         .append_energy(&id, b.fence, st.cfg.lease, &rows)
         .await?;
@@ -1271,7 +1271,7 @@ async fn worker_crack_tips(
     ApiJson(b): ApiJson<CrackTipBatch>,
 ) -> Result<StatusCode, ApiError> {
     require_worker_token(&st, &headers)?;
-    let rows: Vec<CrackTipRow> = b.rows.into_iter().map(Into::into).collect();
+    let rows: Vec<CrackTipRow> = b.rows;
     st.store
         .append_crack_tips(&id, b.fence, st.cfg.lease, &rows)
         .await?;

@@ -14,7 +14,7 @@ use fracture_api::results::{CrackTipRow, EnergyRow, Progress, Snapshot, Summary}
 use sqlx::sqlite::{SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteSynchronous};
 use sqlx::{QueryBuilder, Row, Sqlite, SqlitePool};
 
-use crate::codec;
+use fracture_results::codec;
 
 /// Errors of the store.
 #[derive(Debug, thiserror::Error)]

@@ -20,6 +20,4 @@ pub mod particles;
 pub mod shape;
 pub mod sim;
 
-pub mod verification;
-
 pub use sim::{BuildError, Simulation, SolverConfig, StepError, StepStats, WorkCounters};

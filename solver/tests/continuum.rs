@@ -5,7 +5,7 @@
 mod common;
 use common::*;
 use fracture_solver::SolverConfig;
-use fracture_solver::verification::{self, Settings};
+use fracture_verify::{self as verification, Settings};
 use serde_json::json;
 
 /// Rigid translation: a body in free flight keeps its momentum exactly (to round-off) and

@@ -4,7 +4,7 @@
 #![allow(clippy::unwrap_used)]
 
 use fracture_solver::SolverConfig;
-use fracture_solver::verification::{self, Settings};
+use fracture_verify::{self as verification, Settings};
 
 /// Run a scene to its end and average the crack-tip rows over the last `frac` of the run.
 fn average_tips(s: &fracture_api::Scene, frac: f64) -> Vec<[f64; 4]> {

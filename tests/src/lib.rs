@@ -9,9 +9,9 @@ use serde_json::Value;
 
 /// The `fracture` binary next to the test executable (`target/<profile>/fracture`).
 ///
-/// `cargo test --workspace` (or `-p fracture-server -p fracture-e2e`) builds it, because
-/// `fracture-server`'s own integration tests need it; Cargo does not build the binaries of
-/// dependencies, so when it is missing this runs `cargo build -p fracture-server --bin
+/// `cargo test --workspace` (or `-p fracture-cli -p fracture-e2e`) builds it, because
+/// `fracture-cli`'s own integration tests need it; Cargo does not build the binaries of
+/// dependencies, so when it is missing this runs `cargo build -p fracture-cli --bin
 /// fracture` once (bounded to 10 minutes).
 pub fn fracture_bin() -> PathBuf {
     static BUILT: std::sync::OnceLock<PathBuf> = std::sync::OnceLock::new();
@@ -27,7 +27,7 @@ pub fn fracture_bin() -> PathBuf {
             if !bin.exists() {
                 let cargo = std::env::var_os("CARGO").unwrap_or_else(|| "cargo".into());
                 let mut cmd = Command::new(cargo);
-                cmd.args(["build", "-q", "-p", "fracture-server", "--bin", "fracture"]);
+                cmd.args(["build", "-q", "-p", "fracture-cli", "--bin", "fracture"]);
                 if dir.file_name().is_some_and(|n| n == "release") {
                     cmd.arg("--release");
                 }
@@ -45,7 +45,7 @@ pub fn fracture_bin() -> PathBuf {
             }
             assert!(
                 bin.exists(),
-                "{} is not built: run `cargo test -p fracture-server -p fracture-e2e`",
+                "{} is not built: run `cargo test -p fracture-cli -p fracture-e2e`",
                 bin.display()
             );
             bin

@@ -67,7 +67,7 @@ fn fracture_binary() -> Option<PathBuf> {
     let target_dir = profile_dir.parent()?;
     eprintln!("building the fracture binary ({profile} profile) for the dashboard test…");
     let mut cmd = Command::new(cargo);
-    cmd.args(["build", "-p", "fracture-server", "--bin", "fracture"])
+    cmd.args(["build", "-p", "fracture-cli", "--bin", "fracture"])
         .arg("--target-dir")
         .arg(target_dir)
         .current_dir(env!("CARGO_MANIFEST_DIR"));
@@ -375,7 +375,7 @@ async fn dashboard_end_to_end() {
             let bin = fracture_binary().unwrap_or_else(|| {
                 panic!(
                     "the fracture binary is not next to this test ({}) and could not be built: \
-                     run `cargo build -p fracture-server` (same profile)",
+                     run `cargo build -p fracture-cli` (same profile)",
                     std::env::current_exe()
                         .map(|p| p.display().to_string())
                         .unwrap_or_default()

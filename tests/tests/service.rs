@@ -236,7 +236,7 @@ fn job_lifecycle_results_readable_while_running_and_after() {
     }
     assert!(messages >= ns, "{messages} messages for {ns} snapshots");
     let path = dir.path().join("jobs").join(&id).join("fields.mcap");
-    let snaps = fracture_worker::mcapfile::read_snapshots(&path).expect("read snapshots");
+    let snaps = fracture_results::mcapfile::read_snapshots(&path).expect("read snapshots");
     assert_eq!(snaps.len(), ns, "snapshots in the MCAP file");
 
     // Lists and filters.
@@ -295,7 +295,7 @@ fn killed_worker_job_is_rerun_by_another_without_duplicates() {
     assert!(ne > 0 && ns > 0);
     // The re-run's MCAP file holds each snapshot once.
     let path = dir.path().join("jobs").join(&id).join("fields.mcap");
-    let snaps = fracture_worker::mcapfile::read_snapshots(&path).expect("read snapshots");
+    let snaps = fracture_results::mcapfile::read_snapshots(&path).expect("read snapshots");
     assert_eq!(snaps.len(), ns);
 }
 

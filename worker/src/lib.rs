@@ -7,10 +7,13 @@
 //!   and hands everything to a [`RunSink`] in batches. It never panics: a panic inside the
 //!   solver becomes a failed [`Summary`].
 //! * [`LocalOutput`] is the sink of `fracture run`: the files of `run-output.md`.
-//! * [`mcapfile`] writes and reads the `fields.mcap` file (also used by the server).
+//! * [`remote`] is the remote worker: claims jobs from a server over HTTP, heartbeats,
+//!   obeys cancellation and streams the results ([`remote::run_worker`]).
+//!
+//! The `fields.mcap` format itself lives in [`fracture_results::mcapfile`].
 
 pub mod local;
-pub mod mcapfile;
+pub mod remote;
 mod run;
 
 pub use local::{LocalOutput, LocalOutputError};

@@ -13,8 +13,8 @@ use fracture_api::results::{
     CRACK_TIPS_CSV_HEADER, CrackTipRow, ENERGY_CSV_HEADER, EnergyRow, Progress, Snapshot, Summary,
 };
 
-use crate::mcapfile::{McapFileError, McapWriter};
 use crate::{Control, RunSink, SinkError};
+use fracture_results::mcapfile::{McapFileError, McapWriter};
 
 /// File name of the summary.
 pub const SUMMARY_FILE: &str = "summary.json";

@@ -10,7 +10,7 @@ use fracture_api::results::{
     CRACK_TIPS_CSV_HEADER, CrackTipRow, ENERGY_CSV_HEADER, EnergyRow, FieldComponent, Progress,
     RunStatus, Snapshot, Summary,
 };
-use fracture_worker::mcapfile::McapContents;
+use fracture_results::mcapfile::McapContents;
 use fracture_worker::{Control, LocalOutput, RunOptions, RunSink, SinkError, run_scene};
 
 fn scene_path(name: &str) -> PathBuf {

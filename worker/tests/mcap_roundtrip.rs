@@ -6,7 +6,7 @@
 use std::collections::BTreeSet;
 
 use fracture_api::results::{CrackTipRow, EnergyRow, FieldComponent, Snapshot};
-use fracture_worker::mcapfile::{
+use fracture_results::mcapfile::{
     GridMessage, McapContents, McapWriter, log_time, read_crack_tips, read_energy, read_snapshots,
 };
 

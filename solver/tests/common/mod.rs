@@ -20,7 +20,7 @@ pub fn sim(s: &Scene, threads: usize) -> Simulation {
 
 /// Homalite-100, dynamic constants (reference-solutions.md).
 pub fn homalite() -> serde_json::Value {
-    fracture_solver::verification::homalite()
+    fracture_verify::homalite()
 }
 
 /// Total momentum Σ m v.

@@ -3,7 +3,7 @@
 
 use std::fmt::Write;
 
-use fracture_solver::verification::Problem;
+use fracture_verify::Problem;
 
 use super::accuracy::{Cost, Family, Row, pareto};
 

@@ -255,7 +255,7 @@ fn run_writes_the_four_files() {
     assert_eq!(summary["steps"], size.steps);
     // One row per step (no history_interval) and t = 0.
     assert_eq!(rows.len() as u64, size.steps + 1);
-    let snaps = fracture_worker::mcapfile::read_snapshots(out.join("fields.mcap")).unwrap();
+    let snaps = fracture_results::mcapfile::read_snapshots(out.join("fields.mcap")).unwrap();
     assert_eq!(snaps.len(), 3, "t = 0, 1 µs, 2 µs");
 }
 
@@ -387,7 +387,7 @@ fn ctrl_c_cancels_the_run_and_writes_the_summary() {
     assert_eq!(summary["status"], "cancelled");
     assert!(summary["steps"].as_u64().unwrap() > 0);
     // The MCAP file was finished properly.
-    let m = fracture_worker::mcapfile::McapContents::read(out.join("fields.mcap")).unwrap();
+    let m = fracture_results::mcapfile::McapContents::read(out.join("fields.mcap")).unwrap();
     assert!(!m.truncated);
 }
 

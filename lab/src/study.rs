@@ -18,8 +18,8 @@ use anyhow::Context;
 use fracture_api::Scene;
 use fracture_api::results::{CrackTipRow, EnergyRow, Progress, RunStatus, Snapshot, Summary};
 use fracture_api::scene::WaveSpeeds;
+use fracture_api::sweep::set_path;
 use fracture_api::validate::{scene_from_value, validate as validate_scene};
-use fracture_server::sweep::set_path;
 use fracture_worker::{Control, RunOptions, RunSink, SinkError, run_scene};
 use serde_json::{Value, json};
 
@@ -727,7 +727,7 @@ impl Report<'_> {
                             v.mu,
                             t * 1e6
                         );
-                        let png = fracture_server::render::render_png(s, "fringe")?;
+                        let png = fracture_results::render::render_png(s, "fringe")?;
                         std::fs::write(self.figs.join(&name), png)?;
                         let _ = write!(md, " ![]({}) |", format_args!("rosakis/{name}"));
                     }

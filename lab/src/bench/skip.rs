@@ -96,7 +96,7 @@ fn body_in_grid(h: f64, side: f64, grid: f64, steps: u64) -> anyhow::Result<Scen
     let v = serde_json::json!({
         "name": format!("body {side} m in grid {grid} m"),
         "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [grid, grid]},
-        "materials": {"m": fracture_solver::verification::homalite()},
+        "materials": {"m": fracture_verify::homalite()},
         "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [m + side, m + side]}}}],
         "boundary_conditions": [{"region": {"rectangle": {"min": [0.0, 0.0], "max": [m, m + side]}},
                                  "velocity": {"x": 5.0}}],

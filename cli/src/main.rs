@@ -1,13 +1,13 @@
-//! `fracture`: the single binary of mpm-fracture (`api.md`, command line).
+//! `fracture`: the single binary of mpm-fracture (`api.md`, command line). Thin: it parses
+//! the arguments and calls the crates (`fracture-server` for `serve`, `fracture-worker` for
+//! `worker` and `run`, `fracture-lab` for `bench` and `study`).
 
 use std::path::PathBuf;
 use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-mod bench;
-mod local;
-mod study;
+use fracture_cli::{commands, local};
 
 /// Dynamic fracture with the material point method: service and command-line tools.
 #[derive(Parser, Debug)]
@@ -20,13 +20,13 @@ struct Cli {
 #[derive(Subcommand, Debug)]
 enum Command {
     /// Run the service: HTTP API, job queue, local workers, dashboard.
-    Serve(fracture_server::cli::ServeArgs),
+    Serve(fracture_server::service::ServeArgs),
     /// Run one worker process that claims jobs from a server.
-    Worker(fracture_server::cli::WorkerArgs),
+    Worker(commands::WorkerArgs),
     /// Submit a scene to a server (optionally wait for the outcome).
-    Submit(fracture_server::cli::SubmitArgs),
+    Submit(commands::SubmitArgs),
     /// Submit a parameter sweep: one job per combination of `--param` values.
-    Sweep(fracture_server::cli::SweepArgs),
+    Sweep(commands::SweepArgs),
     /// Run one scene locally, without a server, writing the run directory.
     Run {
         /// Scene JSON file.
@@ -46,20 +46,20 @@ enum Command {
     /// Print the scene JSON Schema.
     Schema,
     /// Benchmarks: throughput (particle-steps per second) and more.
-    Bench(local::BenchArgs),
+    Bench(fracture_lab::BenchArgs),
     /// Studies: the seed's Rosakis parameter sweeps, with figures and the claims table
     /// (`docs/rosakis.md`).
-    Study(study::StudyArgs),
+    Study(fracture_lab::StudyArgs),
 }
 
 fn main() -> ExitCode {
     let cli = Cli::parse();
     match cli.command {
-        None => fracture_server::cli::serve(fracture_server::cli::ServeArgs::from_env()),
-        Some(Command::Serve(a)) => fracture_server::cli::serve(a),
-        Some(Command::Worker(a)) => fracture_server::cli::worker(a),
-        Some(Command::Submit(a)) => fracture_server::cli::submit(a),
-        Some(Command::Sweep(a)) => fracture_server::cli::sweep(a),
+        None => fracture_server::service::serve(fracture_server::service::ServeArgs::from_env()),
+        Some(Command::Serve(a)) => fracture_server::service::serve(a),
+        Some(Command::Worker(a)) => commands::worker(a),
+        Some(Command::Submit(a)) => commands::submit(a),
+        Some(Command::Sweep(a)) => commands::sweep(a),
         Some(Command::Run {
             scene,
             out,
@@ -67,7 +67,7 @@ fn main() -> ExitCode {
         }) => local::run(&scene, &out, threads),
         Some(Command::Validate { scene }) => local::validate(&scene),
         Some(Command::Schema) => local::schema(),
-        Some(Command::Bench(a)) => local::bench(a),
-        Some(Command::Study(a)) => study::study(a),
+        Some(Command::Bench(a)) => fracture_lab::bench(a),
+        Some(Command::Study(a)) => fracture_lab::study(a),
     }
 }

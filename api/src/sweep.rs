@@ -8,8 +8,8 @@
 use std::collections::BTreeMap;
 use std::fmt;
 
-use fracture_api::jobs::JobStatus;
-use fracture_api::results::{Progress, Summary};
+use crate::jobs::JobStatus;
+use crate::results::{Progress, Summary};
 use serde::de::{MapAccess, Visitor};
 use serde::{Deserialize, Deserializer, Serialize};
 

@@ -44,9 +44,9 @@ impl Case {
     }
 }
 
-/// The seed block of `case` (`super::super::local::bench_block` plus the crack).
+/// The seed block of `case` (`super::command::bench_block` plus the crack).
 pub fn case_scene(case: Case, cell_size: f64, ppc: u32, steps: u64) -> anyhow::Result<Scene> {
-    let base = crate::local::bench_block(cell_size, ppc, steps)?;
+    let base = super::command::bench_block(cell_size, ppc, steps)?;
     if case == Case::NoCrack {
         return Ok(base);
     }

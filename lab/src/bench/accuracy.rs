@@ -1,12 +1,12 @@
 //! `fracture bench accuracy`: the verification problems of
-//! [`fracture_solver::verification`] at a ladder of resolutions and settings, each run's
+//! [`fracture_verify`] at a ladder of resolutions and settings, each run's
 //! error against the analytic answer and its wall time, the observed convergence orders and
 //! the Pareto front of error against cost.
 
 use std::path::Path;
 use std::time::Instant;
 
-use fracture_solver::verification::{Problem, Settings, ShapeFunction};
+use fracture_verify::{Problem, Settings, ShapeFunction};
 
 use super::{Machine, csv_line, markdown_table, sig, write_file};
 

@@ -4,6 +4,7 @@
 //! from one of these commands, so it can be regenerated on an idle machine.
 
 pub mod accuracy;
+pub mod command;
 pub mod skip;
 pub mod svg;
 pub mod throughput;

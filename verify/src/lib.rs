@@ -13,7 +13,7 @@ use fracture_api::Scene;
 pub use fracture_api::scene::ShapeFunction;
 use serde_json::{Value, json};
 
-use crate::{Simulation, SolverConfig, StepError};
+use fracture_solver::{Simulation, SolverConfig, StepError};
 
 // ---------------------------------------------------------------------------------------------
 // Analytic references
@@ -113,7 +113,7 @@ pub enum VerifyError {
     Scene(String),
     /// The simulation could not be built.
     #[error(transparent)]
-    Build(#[from] crate::BuildError),
+    Build(#[from] fracture_solver::BuildError),
     /// A step failed.
     #[error(transparent)]
     Step(#[from] StepError),

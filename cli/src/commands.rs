@@ -1,0 +1,365 @@
+//! The client commands: `worker` (a remote worker process), `submit` and `sweep`.
+
+use std::path::PathBuf;
+use std::process::ExitCode;
+use std::time::Duration;
+
+use fracture_api::jobs::JobStatus;
+use fracture_server::server::random_hex;
+use fracture_server::service::init_tracing;
+use fracture_worker::remote::{self, WorkerConfig};
+
+use crate::client::{self, SubmitConfig, SubmitOutcome};
+
+/// Arguments of `fracture worker`.
+#[derive(clap::Args, Debug)]
+pub struct WorkerArgs {
+    /// URL of the server.
+    #[arg(long, env = "FRACTURE_SERVER", default_value = "http://127.0.0.1:8080")]
+    pub server: String,
+    /// Worker token of the server.
+    #[arg(long, env = "FRACTURE_WORKER_TOKEN", hide_env_values = true)]
+    pub token: String,
+    /// Solver threads (0: the solver's default).
+    #[arg(long, env = "FRACTURE_THREADS", default_value_t = 0)]
+    pub threads: usize,
+    /// How often the run reports progress and sends its rows (ms).
+    #[arg(long, default_value_t = 500)]
+    pub flush_ms: u64,
+    /// Exit after the server has been unreachable this long (s).
+    #[arg(long, default_value_t = 120)]
+    pub give_up_seconds: u64,
+    /// Exit when this process is no longer the parent (set for a server's local workers).
+    #[arg(long, hide = true)]
+    pub parent_pid: Option<u32>,
+}
+
+/// Arguments of `fracture submit`.
+#[derive(clap::Args, Debug)]
+pub struct SubmitArgs {
+    /// Scene JSON file (a scene, or `{"scene": …, "priority": …, "labels": …}`).
+    pub scene: PathBuf,
+    /// URL of the server.
+    #[arg(long, env = "FRACTURE_SERVER", default_value = "http://127.0.0.1:8080")]
+    pub server: String,
+    /// API token.
+    #[arg(long, env = "FRACTURE_TOKEN", hide_env_values = true)]
+    pub token: Option<String>,
+    /// Priority (higher runs first).
+    #[arg(long)]
+    pub priority: Option<i64>,
+    /// Label `key=value` (repeatable).
+    #[arg(long = "label")]
+    pub labels: Vec<String>,
+    /// Show progress and exit with the job's outcome (0 completed, 3 failed, 4 cancelled).
+    #[arg(long)]
+    pub wait: bool,
+}
+
+/// Arguments of `fracture sweep`.
+#[derive(clap::Args, Debug)]
+pub struct SweepArgs {
+    /// Base scene JSON file (a scene, or `{"scene": …}`).
+    pub scene: PathBuf,
+    /// A swept parameter, `json.path=v1,v2,…` (repeatable; one job per combination).
+    /// Numeric path segments index arrays; each value is read as JSON (a number, `true`,
+    /// `"text"`), or as a string if it is not JSON; `path=[…]` gives the values as a JSON
+    /// array (for values with commas).
+    #[arg(long = "param", required = true)]
+    pub params: Vec<String>,
+    /// URL of the server.
+    #[arg(long, env = "FRACTURE_SERVER", default_value = "http://127.0.0.1:8080")]
+    pub server: String,
+    /// API token.
+    #[arg(long, env = "FRACTURE_TOKEN", hide_env_values = true)]
+    pub token: Option<String>,
+    /// Name of the sweep (default: the scene's name).
+    #[arg(long)]
+    pub name: Option<String>,
+    /// Priority of its jobs (higher runs first).
+    #[arg(long)]
+    pub priority: Option<i64>,
+    /// Label `key=value` for every job (repeatable).
+    #[arg(long = "label")]
+    pub labels: Vec<String>,
+    /// Show the progress of all jobs and exit with the outcome (0 all completed, 3 some
+    /// failed, 4 some cancelled and none failed).
+    #[arg(long)]
+    pub wait: bool,
+}
+
+/// Parse one `--param path=v1,v2` into the path and its values.
+pub fn parse_param(arg: &str) -> Result<(String, Vec<serde_json::Value>), String> {
+    let (path, values) = arg
+        .split_once('=')
+        .ok_or_else(|| format!("--param must be path=v1,v2,…, got `{arg}`"))?;
+    let path = path.trim();
+    if path.is_empty() {
+        return Err(format!("--param `{arg}`: the path is empty"));
+    }
+    let values = values.trim();
+    let list: Vec<serde_json::Value> = if values.starts_with('[') {
+        serde_json::from_str(values)
+            .map_err(|e| format!("--param {path}: `{values}` is not a JSON array: {e}"))?
+    } else {
+        values
+            .split(',')
+            .map(str::trim)
+            .filter(|v| !v.is_empty())
+            .map(|v| {
+                serde_json::from_str(v).unwrap_or_else(|_| serde_json::Value::String(v.into()))
+            })
+            .collect()
+    };
+    if list.is_empty() {
+        return Err(format!("--param {path}: no values"));
+    }
+    Ok((path.to_string(), list))
+}
+
+/// The body of `POST /api/v1/sweeps` as text: the parameters in the order given (a
+/// `serde_json::Value` would sort them).
+pub fn sweep_body(
+    scene: &serde_json::Value,
+    params: &[(String, Vec<serde_json::Value>)],
+    name: Option<&str>,
+    priority: i64,
+    labels: &serde_json::Map<String, serde_json::Value>,
+) -> String {
+    let params: Vec<String> = params
+        .iter()
+        .map(|(p, v)| {
+            format!(
+                "{}: {}",
+                serde_json::Value::String(p.clone()),
+                serde_json::Value::Array(v.clone())
+            )
+        })
+        .collect();
+    let mut body = format!(
+        "{{\"scene\": {scene}, \"parameters\": {{{}}}, \"priority\": {priority}, \"labels\": {}",
+        params.join(", "),
+        serde_json::Value::Object(labels.clone())
+    );
+    if let Some(n) = name {
+        body.push_str(&format!(
+            ", \"name\": {}",
+            serde_json::Value::String(n.into())
+        ));
+    }
+    body.push('}');
+    body
+}
+
+/// A JSON file the command line names; an unreadable or invalid file is reported on stderr
+/// and gives exit code 2.
+fn read_json_file(path: &std::path::Path) -> Result<serde_json::Value, ExitCode> {
+    let text = std::fs::read_to_string(path).map_err(|e| {
+        eprintln!("cannot read {}: {e}", path.display());
+        ExitCode::from(2)
+    })?;
+    serde_json::from_str(&text).map_err(|e| {
+        eprintln!("{} is not valid JSON: {e}", path.display());
+        ExitCode::from(2)
+    })
+}
+
+/// `--label key=value` arguments as a JSON object; a malformed one is reported on stderr and
+/// gives exit code 2.
+fn parse_labels(args: &[String]) -> Result<serde_json::Map<String, serde_json::Value>, ExitCode> {
+    let mut labels = serde_json::Map::new();
+    for l in args {
+        let Some((k, v)) = l.split_once('=') else {
+            eprintln!("--label must be key=value, got `{l}`");
+            return Err(ExitCode::from(2));
+        };
+        labels.insert(k.to_string(), serde_json::Value::String(v.to_string()));
+    }
+    Ok(labels)
+}
+
+/// `fracture sweep`.
+pub fn sweep(a: SweepArgs) -> ExitCode {
+    let doc = match read_json_file(&a.scene) {
+        Ok(v) => v,
+        Err(code) => return code,
+    };
+    let scene = match doc.get("scene") {
+        Some(s) if doc.get("grid").is_none() => s.clone(),
+        _ => doc,
+    };
+    let mut params = Vec::new();
+    for p in &a.params {
+        match parse_param(p) {
+            Ok(p) => params.push(p),
+            Err(e) => {
+                eprintln!("{e}");
+                return ExitCode::from(2);
+            }
+        }
+    }
+    let labels = match parse_labels(&a.labels) {
+        Ok(l) => l,
+        Err(code) => return code,
+    };
+    let cfg = client::SweepConfig {
+        server: a.server,
+        token: a.token,
+        body: sweep_body(
+            &scene,
+            &params,
+            a.name.as_deref(),
+            a.priority.unwrap_or(0),
+            &labels,
+        ),
+        wait: a.wait,
+    };
+    let mut out = std::io::stdout();
+    match client::sweep(&cfg, &mut out) {
+        Ok(client::SweepOutcome::Rejected(_, msg)) => {
+            eprintln!("{msg}");
+            ExitCode::from(2)
+        }
+        Ok(client::SweepOutcome::Submitted(_)) => ExitCode::SUCCESS,
+        Ok(client::SweepOutcome::Ended(_, s)) => match s.status.as_str() {
+            "completed" => ExitCode::SUCCESS,
+            "cancelled" => ExitCode::from(4),
+            _ => ExitCode::from(3),
+        },
+        Err(e) => {
+            eprintln!("sweep failed: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `fracture worker`.
+pub fn worker(a: WorkerArgs) -> ExitCode {
+    init_tracing();
+    let host = std::fs::read_to_string("/etc/hostname")
+        .map(|h| h.trim().to_string())
+        .unwrap_or_else(|_| "host".into());
+    let cfg = WorkerConfig {
+        server: a.server,
+        token: a.token,
+        threads: a.threads,
+        flush_every: Duration::from_millis(a.flush_ms.max(10)),
+        give_up: Duration::from_secs(a.give_up_seconds),
+        parent_pid: a.parent_pid,
+        worker_id: format!("{host}-{}-{}", std::process::id(), random_hex(3)),
+    };
+    match remote::run_worker(cfg) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) => {
+            tracing::error!(error = format!("{e:#}"), "worker stopped");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+/// `fracture submit`.
+pub fn submit(a: SubmitArgs) -> ExitCode {
+    let mut body = match read_json_file(&a.scene) {
+        Ok(v) => v,
+        Err(code) => return code,
+    };
+    if a.priority.is_some() || !a.labels.is_empty() {
+        let labels = match parse_labels(&a.labels) {
+            Ok(l) => l,
+            Err(code) => return code,
+        };
+        let scene = match body.get("scene") {
+            Some(s) if body.get("grid").is_none() => s.clone(),
+            _ => body,
+        };
+        body = serde_json::json!({
+            "scene": scene,
+            "priority": a.priority.unwrap_or(0),
+            "labels": labels,
+        });
+    }
+    let cfg = SubmitConfig {
+        server: a.server,
+        token: a.token,
+        body,
+        wait: a.wait,
+    };
+    let mut out = std::io::stdout();
+    match client::submit(&cfg, &mut out) {
+        Ok(SubmitOutcome::Rejected(_, msg)) => {
+            eprintln!("{msg}");
+            ExitCode::from(2)
+        }
+        Ok(SubmitOutcome::Submitted(_)) => ExitCode::SUCCESS,
+        Ok(SubmitOutcome::Ended(_, status, message)) => {
+            if let Some(m) = message {
+                eprintln!("{m}");
+            }
+            match status {
+                JobStatus::Completed => ExitCode::SUCCESS,
+                JobStatus::Cancelled => ExitCode::from(4),
+                _ => ExitCode::from(3),
+            }
+        }
+        Err(e) => {
+            eprintln!("submit failed: {e:#}");
+            ExitCode::FAILURE
+        }
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn params_parse_numbers_strings_and_arrays() {
+        let (p, v) =
+            parse_param("cracks.0.propagation.toughness=25, 100,2.5e2").unwrap_or_default();
+        assert_eq!(p, "cracks.0.propagation.toughness");
+        assert_eq!(
+            v,
+            [
+                serde_json::json!(25),
+                serde_json::json!(100),
+                serde_json::json!(250.0)
+            ]
+        );
+        let (_, v) = parse_param("analysis=plane_strain,\"plane_stress\"").unwrap_or_default();
+        assert_eq!(
+            v,
+            [
+                serde_json::json!("plane_strain"),
+                serde_json::json!("plane_stress")
+            ]
+        );
+        let (_, v) = parse_param("cracks.0.points.1=[[0.1,0.2],[0.3,0.4]]").unwrap_or_default();
+        assert_eq!(v.len(), 2);
+        assert!(parse_param("toughness").is_err_and(|e| e.contains("path=v1,v2")));
+        assert!(parse_param("=1").is_err());
+        assert!(parse_param("a=").is_err_and(|e| e.contains("no values")));
+        assert!(parse_param("a=[1,").is_err_and(|e| e.contains("not a JSON array")));
+    }
+
+    #[test]
+    fn sweep_body_keeps_the_parameter_order() {
+        let params = vec![
+            ("z.b".to_string(), vec![serde_json::json!(1)]),
+            ("a.c".to_string(), vec![serde_json::json!("x")]),
+        ];
+        let body = sweep_body(
+            &serde_json::json!({"name": "s"}),
+            &params,
+            Some("n"),
+            2,
+            &serde_json::Map::new(),
+        );
+        let z = body.find("z.b").unwrap_or(usize::MAX);
+        let a = body.find("a.c").unwrap_or(0);
+        assert!(z < a, "{body}");
+        let v: serde_json::Value = serde_json::from_str(&body).unwrap_or_default();
+        assert_eq!(v["name"], "n");
+        assert_eq!(v["priority"], 2);
+        assert_eq!(v["parameters"]["a.c"][0], "x");
+    }
+}

@@ -1,0 +1,246 @@
+//! Local commands: `run`, `validate`, `schema`, `bench` (`api.md`, command line;
+//! `run-output.md` for the run directory and exit status).
+//!
+//! Exit status: 0 success; 1 an output or system error (files, threads); 2 an invalid or
+//! unreadable scene (every problem on stderr with its JSON path and value); 3 a run that
+//! failed numerically (the message says at which step and where); 130 a run stopped with
+//! Ctrl-C (status `cancelled` in its summary). A run keeps its partial outputs in every
+//! case.
+
+// A command-line tool prints its results on stdout.
+#![allow(clippy::print_stdout)]
+
+use std::io::IsTerminal;
+use std::path::Path;
+use std::process::ExitCode;
+use std::sync::Arc;
+use std::sync::atomic::{AtomicBool, Ordering};
+use std::time::Duration;
+
+use fracture_api::Scene;
+use fracture_api::results::{CrackTipRow, EnergyRow, Progress, RunStatus, Snapshot, Summary};
+use fracture_api::validate::{RunSize, parse_scene, validate as validate_scene};
+use fracture_worker::{Control, LocalOutput, RunOptions, RunSink, SinkError, run_scene};
+use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
+
+/// Exit status of an output or system error.
+const EXIT_ERROR: u8 = 1;
+/// Exit status of an invalid scene.
+const EXIT_INVALID: u8 = 2;
+/// Exit status of a numerical failure.
+const EXIT_FAILED: u8 = 3;
+/// Exit status of a run stopped by Ctrl-C (128 + SIGINT, as shells report it).
+const EXIT_INTERRUPTED: u8 = 130;
+
+/// A scene that could not be loaded: what to print and the exit status.
+struct LoadError {
+    message: String,
+    code: u8,
+}
+
+impl LoadError {
+    fn report(self) -> ExitCode {
+        eprintln!("{}", self.message);
+        ExitCode::from(self.code)
+    }
+}
+
+/// Read, parse and validate a scene file.
+fn load_scene(path: &Path) -> Result<(Scene, RunSize), LoadError> {
+    let text = std::fs::read_to_string(path).map_err(|e| LoadError {
+        message: format!("error: cannot read {}: {e}", path.display()),
+        code: EXIT_INVALID,
+    })?;
+    let invalid = |errors: fracture_api::ValidationErrors| LoadError {
+        message: format!(
+            "error: {} is not a valid scene:\n{}",
+            path.display(),
+            errors
+                .0
+                .iter()
+                .map(|e| format!("  {e}"))
+                .collect::<Vec<_>>()
+                .join("\n")
+        ),
+        code: EXIT_INVALID,
+    };
+    let scene = parse_scene(&text).map_err(invalid)?;
+    let size = validate_scene(&scene).map_err(invalid)?;
+    Ok((scene, size))
+}
+
+/// The sink of `fracture run`: the run directory, plus a progress bar on a terminal.
+struct CliSink {
+    out: LocalOutput,
+    bar: Option<ProgressBar>,
+    /// Writing the results failed (as opposed to the physics).
+    output_failed: bool,
+    /// Set by Ctrl-C: cancel at the next progress report.
+    interrupted: Arc<AtomicBool>,
+}
+
+impl CliSink {
+    fn check<T>(&mut self, r: Result<T, SinkError>) -> Result<T, SinkError> {
+        if r.is_err() {
+            self.output_failed = true;
+        }
+        r
+    }
+}
+
+impl RunSink for CliSink {
+    fn progress(&mut self, p: &Progress) -> Result<Control, SinkError> {
+        if let Some(bar) = &self.bar {
+            bar.set_position(p.step);
+            bar.set_message(format!("t = {:.3e} s", p.sim_time));
+        }
+        let r = self.out.progress(p);
+        let control = self.check(r)?;
+        if self.interrupted.load(Ordering::SeqCst) {
+            return Ok(Control::Cancel);
+        }
+        Ok(control)
+    }
+    fn energy(&mut self, rows: &[EnergyRow]) -> Result<(), SinkError> {
+        let r = self.out.energy(rows);
+        self.check(r)
+    }
+    fn crack_tips(&mut self, rows: &[CrackTipRow]) -> Result<(), SinkError> {
+        let r = self.out.crack_tips(rows);
+        self.check(r)
+    }
+    fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError> {
+        let r = self.out.snapshot(snap);
+        self.check(r)
+    }
+    fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
+        if let Some(bar) = self.bar.take() {
+            bar.finish_and_clear();
+        }
+        let r = self.out.finish(summary);
+        self.check(r)
+    }
+}
+
+fn progress_bar(steps: u64) -> Option<ProgressBar> {
+    if !std::io::stderr().is_terminal() {
+        return None;
+    }
+    let bar = ProgressBar::with_draw_target(Some(steps), ProgressDrawTarget::stderr());
+    let style = ProgressStyle::with_template(
+        "{elapsed_precise} [{wide_bar}] {pos}/{len} steps, {msg}, ETA {eta}",
+    )
+    .unwrap_or_else(|_| ProgressStyle::default_bar());
+    bar.set_style(style.progress_chars("=> "));
+    Some(bar)
+}
+
+/// `fracture run`.
+pub fn run(scene: &Path, out: &Path, threads: usize) -> ExitCode {
+    let (scene, size) = match load_scene(scene) {
+        Ok(s) => s,
+        Err(e) => return e.report(),
+    };
+    let mut output = match LocalOutput::create(out) {
+        Ok(o) => o,
+        Err(e) => {
+            eprintln!("error: cannot write the run directory: {e}");
+            return ExitCode::from(EXIT_ERROR);
+        }
+    };
+    if let Err(e) = output.write_scene(&scene) {
+        eprintln!("error: cannot write the run directory: {e}");
+        return ExitCode::from(EXIT_ERROR);
+    }
+    let bar = progress_bar(size.steps);
+    let opts = RunOptions {
+        threads,
+        flush_every: if bar.is_some() {
+            Duration::from_millis(200)
+        } else {
+            RunOptions::default().flush_every
+        },
+    };
+    // Ctrl-C stops the run cleanly (summary written, status cancelled); a second one
+    // exits at once, keeping what was flushed.
+    let interrupted = Arc::new(AtomicBool::new(false));
+    let flag = Arc::clone(&interrupted);
+    if let Err(e) = ctrlc::set_handler(move || {
+        if flag.swap(true, Ordering::SeqCst) {
+            std::process::exit(i32::from(EXIT_INTERRUPTED));
+        }
+        eprintln!("\ninterrupted: stopping at the next report (Ctrl-C again to quit now)");
+    }) {
+        eprintln!("warning: Ctrl-C will not stop the run cleanly: {e}");
+    }
+    let mut sink = CliSink {
+        out: output,
+        bar,
+        output_failed: false,
+        interrupted,
+    };
+    let summary = run_scene(&scene, &opts, &mut sink);
+    let message = summary.message.as_deref().unwrap_or("");
+    match summary.status {
+        RunStatus::Completed => {
+            println!(
+                "completed: {} steps to t = {:.4e} s, {} particles, {} threads, {:.2} s ({:.3e} particle-steps/s)",
+                summary.steps,
+                summary.sim_time,
+                summary.particles,
+                summary.threads,
+                summary.wall_seconds,
+                summary.particle_steps_per_second
+            );
+            println!("results in {}", out.display());
+            ExitCode::SUCCESS
+        }
+        RunStatus::Failed if sink.output_failed => {
+            eprintln!("error: {message}");
+            eprintln!("partial results in {}", out.display());
+            ExitCode::from(EXIT_ERROR)
+        }
+        RunStatus::Failed => {
+            eprintln!(
+                "error: the run failed after {} steps (t = {:.4e} s): {message}",
+                summary.steps, summary.sim_time
+            );
+            eprintln!("partial results in {}", out.display());
+            ExitCode::from(EXIT_FAILED)
+        }
+        RunStatus::Cancelled => {
+            eprintln!("cancelled after {} steps: {message}", summary.steps);
+            eprintln!("partial results in {}", out.display());
+            ExitCode::from(EXIT_INTERRUPTED)
+        }
+    }
+}
+
+/// `fracture validate`.
+pub fn validate(scene: &Path) -> ExitCode {
+    match load_scene(scene) {
+        Ok((scene, size)) => {
+            println!("{}: valid", scene.name);
+            println!("particles: {}", size.particles);
+            println!("grid nodes: {}", size.grid_nodes);
+            println!("time step: {:e} s", size.time_step);
+            println!("steps: {}", size.steps);
+            ExitCode::SUCCESS
+        }
+        Err(e) => e.report(),
+    }
+}
+
+/// `fracture schema`.
+pub fn schema() -> ExitCode {
+    match serde_json::to_string_pretty(&Scene::json_schema()) {
+        Ok(s) => {
+            println!("{s}");
+            ExitCode::SUCCESS
+        }
+        Err(e) => {
+            eprintln!("error: {e}");
+            ExitCode::from(EXIT_ERROR)
+        }
+    }
+}

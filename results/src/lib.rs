@@ -1,0 +1,11 @@
+//! The files of a run (`../shared/design/run-output.md`), one copy of each format:
+//!
+//! * [`mcapfile`]: the `fields.mcap` file (writer and readers; channels in `docs/mcap.md`).
+//! * [`codec`]: the binary snapshot encoding of worker uploads and the store.
+//! * [`render`]: field snapshots as PNG images (colour maps, isochromatic fringes).
+//!
+//! This crate runs no physics: it reads and writes what the solver produced.
+
+pub mod codec;
+pub mod mcapfile;
+pub mod render;
