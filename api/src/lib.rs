@@ -22,7 +22,7 @@ pub mod sweep;
 pub mod validate;
 
 pub use scene::Scene;
-pub use validate::{RunSize, ValidationError, ValidationErrors};
+pub use validate::{RunSize, ValidScene, ValidationError, ValidationErrors};
 
 /// Version string of the solver and data model, recorded in every run summary.
 pub const SOLVER_VERSION: &str = env!("CARGO_PKG_VERSION");

@@ -135,6 +135,20 @@ pub enum RunStatus {
     Cancelled,
 }
 
+/// The kind of a failed run.
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum FailureKind {
+    /// The scene did not validate (deterministic).
+    InvalidScene,
+    /// The solver stopped with a numerical diagnosis (deterministic: the solver is).
+    Numerical,
+    /// The solver panicked (a bug; deterministic for the same scene and build).
+    Panic,
+    /// Results could not be recorded (disk, network): worth retrying.
+    Output,
+}
+
 /// `summary.json`.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct Summary {
@@ -143,6 +157,10 @@ pub struct Summary {
     /// Why, when not completed.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub message: Option<String>,
+    /// What kind of failure, when `failed` (an extension of `run-output.md`: lets a queue
+    /// tell a deterministic failure, which a retry repeats, from a lost worker).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub failure: Option<FailureKind>,
     /// Time steps taken.
     pub steps: u64,
     /// Δt (s).

@@ -180,6 +180,42 @@ impl Checker {
     }
 }
 
+/// A scene that passed [`validate`]: the only way to build a simulation
+/// (`fracture_solver::Simulation::new` takes one), so a scene is validated once, where it
+/// enters, and never again.
+#[derive(Debug, Clone)]
+pub struct ValidScene {
+    scene: Scene,
+    size: RunSize,
+}
+
+impl ValidScene {
+    /// Validate `scene`; every problem found, with its JSON path, on error.
+    pub fn new(scene: Scene) -> Result<ValidScene, ValidationErrors> {
+        let size = validate(&scene)?;
+        Ok(ValidScene { scene, size })
+    }
+    /// The scene.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+    /// Its run size (particles, grid nodes, time step, steps).
+    pub fn size(&self) -> &RunSize {
+        &self.size
+    }
+    /// The scene back.
+    pub fn into_scene(self) -> Scene {
+        self.scene
+    }
+}
+
+impl std::ops::Deref for ValidScene {
+    type Target = Scene;
+    fn deref(&self) -> &Scene {
+        &self.scene
+    }
+}
+
 /// Validate a scene. Returns the run size, or every problem found.
 pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
     let mut c = Checker { errors: Vec::new() };

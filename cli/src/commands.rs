@@ -20,9 +20,9 @@ pub struct WorkerArgs {
     /// Worker token of the server.
     #[arg(long, env = "FRACTURE_WORKER_TOKEN", hide_env_values = true)]
     pub token: String,
-    /// Solver threads (0: the solver's default).
-    #[arg(long, env = "FRACTURE_THREADS", default_value_t = 0)]
-    pub threads: usize,
+    /// Solver threads (`all` or 0: one per core).
+    #[arg(long, env = "FRACTURE_THREADS", default_value = "all")]
+    pub threads: fracture_solver::Parallelism,
     /// How often the run reports progress and sends its rows (ms).
     #[arg(long, default_value_t = 500)]
     pub flush_ms: u64,

@@ -17,9 +17,10 @@ use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
-use fracture_api::Scene;
 use fracture_api::results::{CrackTipRow, EnergyRow, Progress, RunStatus, Snapshot, Summary};
-use fracture_api::validate::{RunSize, parse_scene, validate as validate_scene};
+use fracture_api::validate::parse_scene;
+use fracture_api::{Scene, ValidScene};
+use fracture_solver::Parallelism;
 use fracture_worker::{Control, LocalOutput, RunOptions, RunSink, SinkError, run_scene};
 use indicatif::{ProgressBar, ProgressDrawTarget, ProgressStyle};
 
@@ -46,7 +47,7 @@ impl LoadError {
 }
 
 /// Read, parse and validate a scene file.
-fn load_scene(path: &Path) -> Result<(Scene, RunSize), LoadError> {
+fn load_scene(path: &Path) -> Result<ValidScene, LoadError> {
     let text = std::fs::read_to_string(path).map_err(|e| LoadError {
         message: format!("error: cannot read {}: {e}", path.display()),
         code: EXIT_INVALID,
@@ -65,8 +66,7 @@ fn load_scene(path: &Path) -> Result<(Scene, RunSize), LoadError> {
         code: EXIT_INVALID,
     };
     let scene = parse_scene(&text).map_err(invalid)?;
-    let size = validate_scene(&scene).map_err(invalid)?;
-    Ok((scene, size))
+    ValidScene::new(scene).map_err(invalid)
 }
 
 /// The sink of `fracture run`: the run directory, plus a progress bar on a terminal.
@@ -136,8 +136,8 @@ fn progress_bar(steps: u64) -> Option<ProgressBar> {
 }
 
 /// `fracture run`.
-pub fn run(scene: &Path, out: &Path, threads: usize) -> ExitCode {
-    let (scene, size) = match load_scene(scene) {
+pub fn run(scene: &Path, out: &Path, threads: Parallelism) -> ExitCode {
+    let scene = match load_scene(scene) {
         Ok(s) => s,
         Err(e) => return e.report(),
     };
@@ -152,7 +152,7 @@ pub fn run(scene: &Path, out: &Path, threads: usize) -> ExitCode {
         eprintln!("error: cannot write the run directory: {e}");
         return ExitCode::from(EXIT_ERROR);
     }
-    let bar = progress_bar(size.steps);
+    let bar = progress_bar(scene.size().steps);
     let opts = RunOptions {
         threads,
         flush_every: if bar.is_some() {
@@ -219,7 +219,8 @@ pub fn run(scene: &Path, out: &Path, threads: usize) -> ExitCode {
 /// `fracture validate`.
 pub fn validate(scene: &Path) -> ExitCode {
     match load_scene(scene) {
-        Ok((scene, size)) => {
+        Ok(scene) => {
+            let size = scene.size();
             println!("{}: valid", scene.name);
             println!("particles: {}", size.particles);
             println!("grid nodes: {}", size.grid_nodes);

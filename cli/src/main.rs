@@ -34,9 +34,9 @@ enum Command {
         /// Output directory.
         #[arg(long)]
         out: PathBuf,
-        /// Solver threads (0 = one per core).
-        #[arg(long, default_value_t = 0)]
-        threads: usize,
+        /// Solver threads (`all` or 0: one per core).
+        #[arg(long, default_value = "all")]
+        threads: fracture_solver::Parallelism,
     },
     /// Validate a scene and print the size of the run.
     Validate {

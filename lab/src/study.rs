@@ -55,9 +55,9 @@ pub struct StudyArgs {
     /// 500 m/s and a wider box shows the trend.
     #[arg(long, default_value_t = 4.0e-6)]
     pub window: f64,
-    /// Solver threads per run (0 = one per core).
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
+    /// Solver threads per run (`all`: one per core).
+    #[arg(long, default_value = "all")]
+    pub threads: fracture_solver::Parallelism,
 }
 
 /// The studies of `fracture study`.
@@ -340,7 +340,7 @@ fn variant_scene(base: &Value, v: &Variant, end: f64) -> anyhow::Result<Scene> {
     Ok(scene)
 }
 
-fn run_one(scene: &Scene, threads: usize) -> Measured {
+fn run_one(scene: &Scene, threads: fracture_solver::Parallelism) -> Measured {
     let mut sink = Collect {
         m: Measured {
             status: RunStatus::Failed,
@@ -362,7 +362,12 @@ fn run_one(scene: &Scene, threads: usize) -> Measured {
         threads,
         ..RunOptions::default()
     };
-    run_scene(scene, &opts, &mut sink);
+    match fracture_api::ValidScene::new(scene.clone()) {
+        Ok(valid) => {
+            run_scene(&valid, &opts, &mut sink);
+        }
+        Err(e) => sink.m.message = Some(format!("invalid scene:\n{e}")),
+    }
     sink.m
 }
 
@@ -1371,7 +1376,7 @@ mod tests {
             out: "docs".into(),
             end: 8.0e-5,
             window: 4.0e-6,
-            threads: 0,
+            threads: fracture_solver::Parallelism::AllCores,
         };
         let all = sweeps(&a).expect("the scenes are readable");
         let finest: Vec<&Sweep> = all

@@ -33,7 +33,11 @@ fn bench(c: &mut Criterion) {
     g.sample_size(10);
     for (name, crack) in [("seed_block_500k", false), ("seed_block_500k_crack", true)] {
         let scene = seed_block(0.0005, crack);
-        let mut sim = Simulation::new(&scene, SolverConfig { threads: 0 }).unwrap();
+        let mut sim = Simulation::new(
+            &fracture_api::ValidScene::new(scene.clone()).unwrap(),
+            SolverConfig::all_cores(),
+        )
+        .unwrap();
         for _ in 0..3 {
             sim.step().unwrap();
         }

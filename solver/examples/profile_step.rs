@@ -20,8 +20,12 @@ fn main() {
     if crack {
         v["cracks"] = serde_json::json!([{"points": [[0.0, m + 0.125 + 0.25 * cell], [m + 0.05, m + 0.125 + 0.25 * cell]]}]);
     }
-    let scene = serde_json::from_value(v).unwrap();
-    let mut sim = Simulation::new(&scene, SolverConfig { threads: 1 }).unwrap();
+    let scene: fracture_api::Scene = serde_json::from_value(v).unwrap();
+    let mut sim = Simulation::new(
+        &fracture_api::ValidScene::new(scene.clone()).unwrap(),
+        SolverConfig::with_threads(1),
+    )
+    .unwrap();
     sim.step().unwrap();
     let t = std::time::Instant::now();
     let mut rows = 0usize;

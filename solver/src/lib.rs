@@ -20,4 +20,6 @@ pub mod particles;
 pub mod shape;
 pub mod sim;
 
-pub use sim::{BuildError, Simulation, SolverConfig, StepError, StepStats, WorkCounters};
+pub use sim::{
+    BuildError, Parallelism, Simulation, SolverConfig, StepError, StepStats, WorkCounters,
+};

@@ -12,9 +12,9 @@
 //!
 //! The crack steps (fields, contact, crack motion, J, propagation) live in [`crate::crack`].
 
-use fracture_api::Scene;
 use fracture_api::results::{CrackTipRow, EnergyRow, FieldComponent, Snapshot, field_components};
 use fracture_api::scene::{Analysis, Damping, FieldKind, ShapeFunction};
+use fracture_api::{Scene, ValidScene};
 use rayon::prelude::*;
 
 use crate::crack::Cracks;
@@ -25,19 +25,87 @@ use crate::material::Elastic;
 use crate::particles::{Cold, Kin, Mech, Particles, PartsMut};
 use crate::shape::{Weights2, gimp_weights_1d};
 
+/// How many threads the solver's parallel loops use. Results are bitwise identical for any
+/// choice (deterministic strip-coloured scatter).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Default)]
+pub enum Parallelism {
+    /// One thread per core (`std::thread::available_parallelism`).
+    #[default]
+    AllCores,
+    /// Exactly this many threads.
+    Threads(std::num::NonZeroUsize),
+}
+
+impl Parallelism {
+    /// Exactly `n` threads (at least one).
+    pub fn threads(n: usize) -> Parallelism {
+        Parallelism::Threads(std::num::NonZeroUsize::MIN.saturating_add(n.saturating_sub(1)))
+    }
+    /// The command line's count: 0 means one per core, `n` means `n` threads.
+    pub fn from_count(n: usize) -> Parallelism {
+        if n == 0 {
+            Parallelism::AllCores
+        } else {
+            Parallelism::threads(n)
+        }
+    }
+    /// The number of threads this means on this machine.
+    pub fn resolve(self) -> usize {
+        match self {
+            Parallelism::AllCores => std::thread::available_parallelism().map_or(1, |n| n.get()),
+            Parallelism::Threads(n) => n.get(),
+        }
+    }
+}
+
+impl std::fmt::Display for Parallelism {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        match self {
+            Parallelism::AllCores => f.write_str("all"),
+            Parallelism::Threads(n) => write!(f, "{n}"),
+        }
+    }
+}
+
+impl std::str::FromStr for Parallelism {
+    type Err = String;
+    /// `all` (or `0`) for one thread per core, or a thread count.
+    fn from_str(s: &str) -> Result<Parallelism, String> {
+        let s = s.trim();
+        if s.eq_ignore_ascii_case("all") {
+            return Ok(Parallelism::AllCores);
+        }
+        s.parse::<usize>()
+            .map(Parallelism::from_count)
+            .map_err(|_| format!("`{s}` is not a thread count (a whole number, or `all`)"))
+    }
+}
+
 /// How the solver runs (not physics).
 #[derive(Debug, Clone, Copy, Default)]
 pub struct SolverConfig {
-    /// Worker threads; 0 = one per core.
-    pub threads: usize,
+    /// Threads of the parallel loops.
+    pub threads: Parallelism,
+}
+
+impl SolverConfig {
+    /// One thread per core.
+    pub fn all_cores() -> SolverConfig {
+        SolverConfig {
+            threads: Parallelism::AllCores,
+        }
+    }
+    /// Exactly `n` threads (at least one).
+    pub fn with_threads(n: usize) -> SolverConfig {
+        SolverConfig {
+            threads: Parallelism::threads(n),
+        }
+    }
 }
 
 /// Why a simulation could not be built.
 #[derive(Debug, thiserror::Error)]
 pub enum BuildError {
-    /// The scene failed validation.
-    #[error("invalid scene:\n{0}")]
-    Invalid(#[from] fracture_api::ValidationErrors),
     /// The thread pool could not be created.
     #[error("thread pool: {0}")]
     Threads(String),
@@ -268,13 +336,9 @@ pub struct Simulation {
 
 impl Simulation {
     /// Build a simulation from a scene (validated here too).
-    pub fn new(scene: &Scene, config: SolverConfig) -> Result<Simulation, BuildError> {
-        let size = fracture_api::validate::validate(scene)?;
-        let threads = if config.threads == 0 {
-            std::thread::available_parallelism().map_or(1, |n| n.get())
-        } else {
-            config.threads
-        };
+    pub fn new(valid: &ValidScene, config: SolverConfig) -> Result<Simulation, BuildError> {
+        let (scene, size) = (valid.scene(), valid.size());
+        let threads = config.threads.resolve();
         let pool = rayon::ThreadPoolBuilder::new()
             .num_threads(threads)
             .build()

@@ -56,7 +56,8 @@ fn free_flight_keeps_momentum_and_no_stress() {
 /// `verification::wave_bar`, `verification::run_wave_bar`.
 #[test]
 fn constrained_bar_wave_speed_and_particle_velocity() {
-    let r = verification::run_wave_bar(&Settings::at(0.001), SolverConfig { threads: 2 }).unwrap();
+    let r =
+        verification::run_wave_bar(&Settings::at(0.001), SolverConfig::with_threads(2)).unwrap();
     let (c, c_l) = (r.speed, r.c_l);
     let (plateau, v_expected) = (r.plateau, r.v_expected);
     let c_err = (c - c_l).abs() / c_l;
@@ -80,7 +81,7 @@ fn constrained_bar_wave_speed_and_particle_velocity() {
 #[test]
 fn vibrating_bar_period_and_energy() {
     let r =
-        verification::run_vibrating_bar(&Settings::at(0.5), SolverConfig { threads: 2 }).unwrap();
+        verification::run_vibrating_bar(&Settings::at(0.5), SolverConfig::with_threads(2)).unwrap();
     // Crossings every half period: the period is fitted over all of them.
     let n = r.crossings;
     assert!(n >= 19, "only {n} zero crossings");

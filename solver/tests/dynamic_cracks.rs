@@ -21,7 +21,7 @@ fn freund(contour: u32) -> Vec<(f64, f64, f64)> {
         ..Settings::at(0.0005)
     })
     .unwrap();
-    verification::freund_series(&f, SolverConfig { threads: 0 })
+    verification::freund_series(&f, SolverConfig::all_cores())
         .unwrap()
         .rows
 }

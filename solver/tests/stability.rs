@@ -21,7 +21,11 @@ struct Outcome {
 
 /// Step until the end, an error, or `max_steps`; check every energy row is finite.
 fn run(scene: &fracture_api::Scene, max_steps: u64, velocity: Option<[f64; 2]>) -> Outcome {
-    let mut sim = Simulation::new(scene, SolverConfig { threads: 0 }).unwrap();
+    let mut sim = Simulation::new(
+        &fracture_api::ValidScene::new(scene.clone()).unwrap(),
+        SolverConfig::all_cores(),
+    )
+    .unwrap();
     if let Some(v) = velocity {
         sim.set_velocities(|_| v);
     }
@@ -222,7 +226,11 @@ fn long_run_hundred_thousand_steps() {
         "bodies": [{"material": "m", "region": {"rectangle": {"min": [0.002, 0.002], "max": [0.012, 0.006]}}}],
         "time": {"end": 1.0}
     }));
-    let mut sim = Simulation::new(&s, SolverConfig { threads: 1 }).unwrap();
+    let mut sim = Simulation::new(
+        &fracture_api::ValidScene::new(s.clone()).unwrap(),
+        SolverConfig::with_threads(1),
+    )
+    .unwrap();
     // A full cosine wave along the body: no net momentum and no angular momentum, so the
     // free body vibrates in place (a half-wave would set it spinning into the grid edge).
     sim.set_velocities(|x| {

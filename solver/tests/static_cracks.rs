@@ -8,7 +8,7 @@ use fracture_verify::{self as verification, Settings};
 
 /// Run a scene to its end and average the crack-tip rows over the last `frac` of the run.
 fn average_tips(s: &fracture_api::Scene, frac: f64) -> Vec<[f64; 4]> {
-    verification::average_tips(s, frac, SolverConfig { threads: 0 })
+    verification::average_tips(s, frac, SolverConfig::all_cores())
         .unwrap()
         .tips
 }

@@ -111,6 +111,9 @@ pub enum VerifyError {
     /// The settings gave an invalid scene.
     #[error("invalid scene: {0}")]
     Scene(String),
+    /// The scene failed validation.
+    #[error("invalid scene:\n{0}")]
+    Invalid(#[from] fracture_api::ValidationErrors),
     /// The simulation could not be built.
     #[error(transparent)]
     Build(#[from] fracture_solver::BuildError),
@@ -232,9 +235,13 @@ impl Problem {
             }),
         }
     }
-    /// Run the problem at `s` on `threads` threads (0 = one per core) and compare with the
+    /// Run the problem at `s` on `threads` threads and compare with the
     /// analytic answer.
-    pub fn measure(self, s: &Settings, threads: usize) -> Result<Measurement, VerifyError> {
+    pub fn measure(
+        self,
+        s: &Settings,
+        threads: fracture_solver::Parallelism,
+    ) -> Result<Measurement, VerifyError> {
         let cfg = SolverConfig { threads };
         match self {
             Problem::CenterCrack | Problem::EdgeCrack | Problem::ShearCrack => {
@@ -535,7 +542,7 @@ pub fn average_tips(
     frac: f64,
     config: SolverConfig,
 ) -> Result<AveragedTips, VerifyError> {
-    let mut sim = Simulation::new(scene, config)?;
+    let mut sim = Simulation::new(&fracture_api::ValidScene::new(scene.clone())?, config)?;
     let t_avg = (1.0 - frac) * scene.time.end;
     let mut sums: Vec<[f64; 4]> = Vec::new();
     let mut n = 0.0;
@@ -635,7 +642,7 @@ pub struct FreundSeries {
 
 /// Run the Freund scene, sampling K_I at every step after t_c.
 pub fn freund_series(f: &FreundScene, config: SolverConfig) -> Result<FreundSeries, VerifyError> {
-    let mut sim = Simulation::new(&f.scene, config)?;
+    let mut sim = Simulation::new(&fracture_api::ValidScene::new(f.scene.clone())?, config)?;
     let mut rows = Vec::new();
     while !sim.is_finished() {
         sim.step()?;
@@ -703,7 +710,7 @@ pub struct BarResult {
 pub fn run_vibrating_bar(s: &Settings, config: SolverConfig) -> Result<BarResult, VerifyError> {
     let (l, x0) = (25.0, 1.0);
     let b = vibrating_bar(s)?;
-    let mut sim = Simulation::new(&b.scene, config)?;
+    let mut sim = Simulation::new(&fracture_api::ValidScene::new(b.scene.clone())?, config)?;
     let beta = PI / (2.0 * l);
     sim.set_velocities(|x| [0.1 * (beta * (x[0] - x0)).sin(), 0.0]);
     let e0 = sim.energy();
@@ -809,7 +816,7 @@ pub struct WaveResult {
 pub fn run_wave_bar(s: &Settings, config: SolverConfig) -> Result<WaveResult, VerifyError> {
     let w = wave_bar(s)?;
     let m = 2.0 * s.cell_size;
-    let mut sim = Simulation::new(&w.scene, config)?;
+    let mut sim = Simulation::new(&fracture_api::ValidScene::new(w.scene.clone())?, config)?;
     let v_expected = w.v_expected;
     let front = |sim: &Simulation| -> f64 {
         let p = sim.particles();

@@ -65,8 +65,8 @@ pub trait RunSink {
 /// How a run is driven (not physics).
 #[derive(Debug, Clone, PartialEq, Eq)]
 pub struct RunOptions {
-    /// Solver threads; 0 = one per core.
-    pub threads: usize,
+    /// Solver threads.
+    pub threads: fracture_solver::Parallelism,
     /// Wall-clock interval between progress reports (and row flushes).
     pub flush_every: Duration,
 }
@@ -74,7 +74,7 @@ pub struct RunOptions {
 impl Default for RunOptions {
     fn default() -> Self {
         RunOptions {
-            threads: 0,
+            threads: fracture_solver::Parallelism::AllCores,
             flush_every: Duration::from_millis(500),
         }
     }

@@ -8,9 +8,11 @@ use std::sync::mpsc;
 use std::time::{Duration, Instant};
 
 use crate::{Control, RunOptions, RunSink, SinkError};
-use fracture_api::Scene;
 use fracture_api::jobs::ErrorBody;
-use fracture_api::results::{CrackTipRow, EnergyRow, Progress, RunStatus, Snapshot, Summary};
+use fracture_api::results::{
+    CrackTipRow, EnergyRow, FailureKind, Progress, RunStatus, Snapshot, Summary,
+};
+use fracture_api::{Scene, ValidScene};
 use reqwest::StatusCode;
 use reqwest::blocking::{Client, Response};
 
@@ -43,8 +45,8 @@ pub struct WorkerConfig {
     pub server: String,
     /// Worker token.
     pub token: String,
-    /// Solver threads (0: the solver's default).
-    pub threads: usize,
+    /// Solver threads.
+    pub threads: fracture_solver::Parallelism,
     /// How often the solver reports progress (and flushes rows).
     pub flush_every: Duration,
     /// Give up after the server has been unreachable this long.
@@ -187,10 +189,11 @@ pub fn run_worker(cfg: WorkerConfig) -> anyhow::Result<()> {
     }
 }
 
-fn failed_summary(scene: Option<&Scene>, message: String) -> Summary {
+fn failed_summary(scene: Option<&Scene>, failure: FailureKind, message: String) -> Summary {
     Summary {
         status: RunStatus::Failed,
         message: Some(message),
+        failure: Some(failure),
         steps: 0,
         time_step: 0.0,
         sim_time: 0.0,
@@ -259,16 +262,28 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
         lost: lost.clone(),
         finished: false,
     };
-    let scene = serde_json::from_value::<Scene>(claim.scene);
-    let summary = match &scene {
-        Ok(scene) => {
-            let opts = RunOptions {
-                threads: cfg.threads,
-                flush_every: cfg.flush_every,
-            };
-            crate::run_scene(scene, &opts, &mut sink)
-        }
-        Err(e) => failed_summary(None, format!("the claimed scene could not be read: {e}")),
+    // The server validated the scene before queueing it; a worker of another version may
+    // still disagree, so it validates once more here (the only way to a `ValidScene`).
+    let summary = match fracture_api::validate::scene_from_value(claim.scene) {
+        Ok(scene) => match ValidScene::new(scene.clone()) {
+            Ok(valid) => {
+                let opts = RunOptions {
+                    threads: cfg.threads,
+                    flush_every: cfg.flush_every,
+                };
+                crate::run_scene(&valid, &opts, &mut sink)
+            }
+            Err(e) => failed_summary(
+                Some(&scene),
+                FailureKind::InvalidScene,
+                format!("the claimed scene is not valid here:\n{e}"),
+            ),
+        },
+        Err(e) => failed_summary(
+            None,
+            FailureKind::InvalidScene,
+            format!("the claimed scene could not be read: {e}"),
+        ),
     };
     if !sink.finished && !lost.load(Ordering::SeqCst) {
         let _ = sink.finish(&summary);

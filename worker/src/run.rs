@@ -4,18 +4,20 @@ use std::any::Any;
 use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::time::Instant;
 
-use fracture_api::Scene;
-use fracture_api::results::{CrackTipRow, EnergyRow, Progress, RunStatus, Snapshot, Summary};
+use fracture_api::results::{
+    CrackTipRow, EnergyRow, FailureKind, Progress, RunStatus, Snapshot, Summary,
+};
 use fracture_api::scene::FieldKind;
-use fracture_solver::{Simulation, SolverConfig, StepStats};
+use fracture_api::{Scene, ValidScene};
+use fracture_solver::{Simulation, SolverConfig, StepError, StepStats};
 
 use crate::{Control, RunOptions, RunSink, SinkError};
 
 /// What the run loop needs from a simulation. Implemented by
 /// [`Simulation`]; tests drive the loop with scripted models.
 pub(crate) trait Model {
-    /// Advance one step; the error is already the diagnosis.
-    fn step(&mut self) -> Result<StepStats, String>;
+    /// Advance one step; the error is the solver's diagnosis.
+    fn step(&mut self) -> Result<StepStats, StepError>;
     fn time(&self) -> f64;
     fn time_step(&self) -> f64;
     fn end_time(&self) -> f64;
@@ -30,8 +32,8 @@ pub(crate) trait Model {
 }
 
 impl Model for Simulation {
-    fn step(&mut self) -> Result<StepStats, String> {
-        Simulation::step(self).map_err(|e| e.to_string())
+    fn step(&mut self) -> Result<StepStats, StepError> {
+        Simulation::step(self)
     }
     fn time(&self) -> f64 {
         Simulation::time(self)
@@ -82,17 +84,23 @@ impl Model for Simulation {
 ///   message says so) and a panic inside the solver (the message carries the panic's).
 ///   Whatever was sampled before is flushed, plus one final sample where the solver can
 ///   still give one.
-pub fn run_scene(scene: &Scene, opts: &RunOptions, sink: &mut dyn RunSink) -> Summary {
+pub fn run_scene(scene: &ValidScene, opts: &RunOptions, sink: &mut dyn RunSink) -> Summary {
     let config = SolverConfig {
         threads: opts.threads,
     };
     let built = catch_unwind(AssertUnwindSafe(|| Simulation::new(scene, config)));
     match built {
         Ok(Ok(mut sim)) => run_model(&mut sim, scene, opts, sink),
-        Ok(Err(e)) => finish_early(scene, sink, format!("could not build the simulation: {e}")),
+        Ok(Err(e)) => finish_early(
+            scene,
+            sink,
+            FailureKind::Output,
+            format!("could not build the simulation: {e}"),
+        ),
         Err(p) => finish_early(
             scene,
             sink,
+            FailureKind::Panic,
             format!(
                 "solver panicked while building the simulation: {}",
                 panic_message(&*p)
@@ -105,6 +113,7 @@ fn base_summary(scene: &Scene) -> Summary {
     Summary {
         status: RunStatus::Failed,
         message: None,
+        failure: None,
         steps: 0,
         time_step: 0.0,
         sim_time: 0.0,
@@ -119,9 +128,15 @@ fn base_summary(scene: &Scene) -> Summary {
     }
 }
 
-fn finish_early(scene: &Scene, sink: &mut dyn RunSink, message: String) -> Summary {
+fn finish_early(
+    scene: &Scene,
+    sink: &mut dyn RunSink,
+    failure: FailureKind,
+    message: String,
+) -> Summary {
     let mut summary = base_summary(scene);
     summary.message = Some(message);
+    summary.failure = Some(failure);
     // Nothing else can be done with a sink error here: the summary already says failed.
     let _ = sink.finish(&summary);
     summary
@@ -141,7 +156,7 @@ pub(crate) fn panic_message(p: &(dyn Any + Send)) -> String {
 /// Why the loop stopped early.
 enum Stop {
     Cancelled,
-    Step(String),
+    Step(StepError),
     Panic(String),
     Sink(SinkError),
 }
@@ -369,12 +384,21 @@ pub(crate) fn run_model<M: Model>(
             RunStatus::Cancelled,
             Some("cancelled on request".to_string()),
         ),
-        Err(Stop::Step(m)) => (RunStatus::Failed, Some(m)),
-        Err(Stop::Panic(m)) => (RunStatus::Failed, Some(m)),
-        Err(Stop::Sink(e)) => (
-            RunStatus::Failed,
-            Some(format!("could not record results: {e}")),
-        ),
+        Err(Stop::Step(e)) => {
+            summary.failure = Some(FailureKind::Numerical);
+            (RunStatus::Failed, Some(e.to_string()))
+        }
+        Err(Stop::Panic(m)) => {
+            summary.failure = Some(FailureKind::Panic);
+            (RunStatus::Failed, Some(m))
+        }
+        Err(Stop::Sink(e)) => {
+            summary.failure = Some(FailureKind::Output);
+            (
+                RunStatus::Failed,
+                Some(format!("could not record results: {e}")),
+            )
+        }
     };
     summary.status = status;
     summary.message = message;
@@ -435,14 +459,20 @@ mod tests {
     }
 
     impl Model for Fake {
-        fn step(&mut self) -> Result<StepStats, String> {
+        fn step(&mut self) -> Result<StepStats, StepError> {
             let next = self.taken + 1;
             if self.panic_at == Some(next) {
                 panic!("index out of bounds in step {next}");
             }
             self.taken = next;
             if self.fail_at == Some(next) {
-                return Err(format!("step {next}: velocity of particle 7 is not finite"));
+                return Err(StepError::NonFinite {
+                    step: next,
+                    particle: 7,
+                    quantity: "velocity",
+                    x: 0.0,
+                    y: 0.0,
+                });
             }
             Ok(StepStats {
                 grew: false,
@@ -571,7 +601,7 @@ mod tests {
 
     fn opts(ms: u64) -> RunOptions {
         RunOptions {
-            threads: 1,
+            threads: fracture_solver::Parallelism::threads(1),
             flush_every: Duration::from_millis(ms),
         }
     }
@@ -665,8 +695,9 @@ mod tests {
         assert_eq!(s.status, RunStatus::Failed);
         assert_eq!(
             s.message.as_deref(),
-            Some("step 6: velocity of particle 7 is not finite")
+            Some("step 6: velocity of particle 7 at (0.000000e0, 0.000000e0) m is not finite")
         );
+        assert_eq!(s.failure, Some(FailureKind::Numerical));
         assert_eq!(s.steps, 6);
         let ks: Vec<u64> = sink.energy.iter().map(|e| e.kinetic as u64).collect();
         assert_eq!(

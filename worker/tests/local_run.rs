@@ -26,7 +26,7 @@ fn load(name: &str) -> Scene {
 
 fn opts() -> RunOptions {
     RunOptions {
-        threads: 1,
+        threads: fracture_solver::Parallelism::threads(1),
         flush_every: Duration::from_millis(50),
     }
 }
@@ -90,6 +90,7 @@ fn local_output_writes_the_run_output_files() {
     let summary = Summary {
         status: RunStatus::Completed,
         message: None,
+        failure: None,
         steps: 10,
         time_step: 1.0e-7,
         sim_time: 1.0e-6,
@@ -162,7 +163,11 @@ fn impact_bar_run_writes_the_run_directory() {
     let dir = tempfile::tempdir().unwrap();
     let mut sink = LocalOutput::create(dir.path()).unwrap();
     sink.write_scene(&scene).unwrap();
-    let s = run_scene(&scene, &opts(), &mut sink);
+    let s = run_scene(
+        &fracture_api::ValidScene::new(scene.clone()).unwrap(),
+        &opts(),
+        &mut sink,
+    );
     assert_eq!(s.status, RunStatus::Completed, "{s:?}");
     assert_eq!(s.steps, size.steps);
     assert_eq!(s.particles, size.particles);
@@ -270,10 +275,14 @@ fn cancel_ends_the_run_cancelled_and_keeps_the_files() {
         progress_calls: 0,
     };
     let opts = RunOptions {
-        threads: 1,
+        threads: fracture_solver::Parallelism::threads(1),
         flush_every: Duration::ZERO,
     };
-    let s = run_scene(&scene, &opts, &mut sink);
+    let s = run_scene(
+        &fracture_api::ValidScene::new(scene.clone()).unwrap(),
+        &opts,
+        &mut sink,
+    );
     assert_eq!(s.status, RunStatus::Cancelled, "{s:?}");
     assert_eq!(s.steps, 1, "cancelled at the first report, after one step");
     assert!(s.steps < size.steps);
@@ -297,7 +306,11 @@ fn a_sink_error_ends_the_run_failed() {
         fail_snapshot: true,
         progress_calls: 0,
     };
-    let s = run_scene(&scene, &opts(), &mut sink);
+    let s = run_scene(
+        &fracture_api::ValidScene::new(scene.clone()).unwrap(),
+        &opts(),
+        &mut sink,
+    );
     assert_eq!(s.status, RunStatus::Failed);
     let msg = s.message.clone().unwrap();
     assert!(msg.contains("no space left on device"), "{msg}");
@@ -315,7 +328,11 @@ fn free_flight_keeps_its_momentum() {
     let scene = load("free-flight.json");
     let dir = tempfile::tempdir().unwrap();
     let mut sink = LocalOutput::create(dir.path()).unwrap();
-    let s = run_scene(&scene, &opts(), &mut sink);
+    let s = run_scene(
+        &fracture_api::ValidScene::new(scene.clone()).unwrap(),
+        &opts(),
+        &mut sink,
+    );
     assert_eq!(s.status, RunStatus::Completed, "{s:?}");
     let m = McapContents::read(dir.path().join("fields.mcap")).unwrap();
     // ½ρAt|v|² = 0.5 · 1230 · 1e-4 · 1e-3 · 29 J, constant; no strain energy.
@@ -356,7 +373,11 @@ fn crack_tips_get_one_row_per_tip_per_sample() {
     .unwrap();
     let dir = tempfile::tempdir().unwrap();
     let mut sink = LocalOutput::create(dir.path()).unwrap();
-    let s = run_scene(&scene, &opts(), &mut sink);
+    let s = run_scene(
+        &fracture_api::ValidScene::new(scene.clone()).unwrap(),
+        &opts(),
+        &mut sink,
+    );
     assert_eq!(s.status, RunStatus::Completed, "{s:?}");
     let energy = lines(&dir.path().join("energy.csv"));
     let tips = lines(&dir.path().join("crack_tips.csv"));

@@ -221,7 +221,7 @@ fn shape_name(s: ShapeFunction) -> &'static str {
 }
 
 /// Run one rung.
-pub fn run_rung(r: &Rung, threads: usize) -> Row {
+pub fn run_rung(r: &Rung, threads: fracture_solver::Parallelism) -> Row {
     let s = r.settings;
     let (start, cpu0) = (Instant::now(), super::process_cpu_seconds());
     let m = r.problem.measure(&s, threads);
@@ -356,7 +356,13 @@ fn pct(x: f64) -> String {
     }
 }
 
-fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize, cost: Cost) -> String {
+fn markdown(
+    rows: &[Row],
+    machine: &Machine,
+    ladder: Ladder,
+    threads: fracture_solver::Parallelism,
+    cost: Cost,
+) -> String {
     let mut s = format!(
         "# Accuracy ladder\n\n`fracture bench accuracy --ladder {}` with {} solver threads; {}.\n\
          Error = (solver − analytic)/analytic; Freund: mean |error| over t − t_c ∈ [3, 14] µs \
@@ -367,10 +373,9 @@ fn markdown(rows: &[Row], machine: &Machine, ladder: Ladder, threads: usize, cos
             Ladder::Quick => "quick",
             Ladder::Full => "full",
         },
-        if threads == 0 {
-            "one per core".to_string()
-        } else {
-            threads.to_string()
+        match threads {
+            fracture_solver::Parallelism::AllCores => "one per core".to_string(),
+            fracture_solver::Parallelism::Threads(n) => n.to_string(),
         },
         machine.describe()
     );
@@ -484,7 +489,7 @@ pub fn run(
     ladder: Ladder,
     problems: &[Problem],
     families: &[Family],
-    threads: usize,
+    threads: fracture_solver::Parallelism,
     cost: Cost,
     out: &Path,
 ) -> anyhow::Result<Vec<Row>> {
@@ -532,7 +537,7 @@ fn write_reports(
     rows: &[Row],
     machine: &Machine,
     ladder: Ladder,
-    threads: usize,
+    threads: fracture_solver::Parallelism,
     cost: Cost,
 ) -> anyhow::Result<()> {
     write_file(out, "accuracy.csv", &csv(rows))?;

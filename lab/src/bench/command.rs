@@ -29,9 +29,9 @@ pub struct BenchArgs {
     /// Untimed warm-up steps before them.
     #[arg(long, default_value_t = 5)]
     pub warmup: u64,
-    /// Solver threads (0 = one per core); the throughput matrix uses --thread-counts.
-    #[arg(long, default_value_t = 0)]
-    pub threads: usize,
+    /// Solver threads (`all`: one per core); the throughput matrix uses --thread-counts.
+    #[arg(long, default_value = "all")]
+    pub threads: fracture_solver::Parallelism,
     /// Thread counts of the throughput matrix.
     #[arg(long, value_delimiter = ',', default_value = "1,2")]
     pub thread_counts: Vec<usize>,
@@ -144,8 +144,11 @@ fn throughput(a: &BenchArgs) -> anyhow::Result<Result<Throughput, String>> {
     if let Err(e) = validate_scene(&scene) {
         anyhow::bail!("the benchmark block is not a valid scene:\n{e}");
     }
-    let mut sim = Simulation::new(&scene, SolverConfig { threads: a.threads })
-        .context("building the benchmark block")?;
+    let mut sim = Simulation::new(
+        &fracture_api::ValidScene::new(scene.clone())?,
+        SolverConfig { threads: a.threads },
+    )
+    .context("building the benchmark block")?;
     for _ in 0..a.warmup {
         if let Err(e) = sim.step() {
             return Ok(Err(e.to_string()));

@@ -23,8 +23,8 @@ pub struct Options {
     pub steps: u64,
     /// Warm-up steps.
     pub warmup: u64,
-    /// Solver threads (0 = one per core).
-    pub threads: usize,
+    /// Solver threads (`all`: one per core).
+    pub threads: fracture_solver::Parallelism,
 }
 
 /// One measurement.
@@ -63,8 +63,11 @@ fn time_steps(
     o: &Options,
     every: u64,
 ) -> anyhow::Result<(Simulation, f64, [u64; 5])> {
-    let mut sim = Simulation::new(scene, SolverConfig { threads: o.threads })
-        .with_context(|| format!("building {}", scene.name))?;
+    let mut sim = Simulation::new(
+        &fracture_api::ValidScene::new(scene.clone())?,
+        SolverConfig { threads: o.threads },
+    )
+    .with_context(|| format!("building {}", scene.name))?;
     for _ in 0..o.warmup {
         sim.step().map_err(|e| anyhow::anyhow!("{e}"))?;
     }
@@ -217,7 +220,10 @@ pub fn run(o: &Options, out: Option<&Path>) -> anyhow::Result<Vec<Figure>> {
     });
 
     // 4. Snapshots: one field against all of them, against a step.
-    let sim = Simulation::new(&plain, SolverConfig { threads: o.threads })?;
+    let sim = Simulation::new(
+        &fracture_api::ValidScene::new(plain.clone())?,
+        SolverConfig { threads: o.threads },
+    )?;
     let reps = 5;
     let time_snap = |fields: &[FieldKind]| {
         let mut comps = 0;

@@ -206,8 +206,11 @@ pub fn triad_bandwidth(n: usize, threads: usize, reps: usize) -> anyhow::Result<
 
 fn time_case(case: Case, threads: usize, o: &Options) -> anyhow::Result<(Run, f64)> {
     let scene = case_scene(case, o.cell_size, o.ppc, o.warmup + o.steps)?;
-    let mut sim = Simulation::new(&scene, SolverConfig { threads })
-        .with_context(|| format!("building the {} block", case.name()))?;
+    let mut sim = Simulation::new(
+        &fracture_api::ValidScene::new(scene.clone())?,
+        SolverConfig::with_threads(threads),
+    )
+    .with_context(|| format!("building the {} block", case.name()))?;
     let every = o.history_every.max(1);
     let sample = |sim: &mut Simulation, k: u64| {
         if case != Case::NoCrack && k.is_multiple_of(every) {

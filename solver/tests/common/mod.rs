@@ -15,7 +15,13 @@ pub fn scene(v: serde_json::Value) -> Scene {
 
 /// Build a simulation with `threads` threads.
 pub fn sim(s: &Scene, threads: usize) -> Simulation {
-    Simulation::new(s, SolverConfig { threads }).unwrap()
+    Simulation::new(
+        &fracture_api::ValidScene::new(s.clone()).unwrap(),
+        SolverConfig {
+            threads: fracture_solver::Parallelism::from_count(threads),
+        },
+    )
+    .unwrap()
 }
 
 /// Homalite-100, dynamic constants (reference-solutions.md).
