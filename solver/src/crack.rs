@@ -34,7 +34,17 @@ use crate::grid::{GridGeom, Node, STRIP};
 use crate::material::Elastic;
 use crate::particles::{Kin, Mech, Particles};
 use crate::shape::Weights2;
-use crate::sim::Stage;
+
+/// The momentum stage at which contact is applied (`algorithm.md` §4, pitfall 4).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Stage {
+    /// After P2G (momentum p).
+    Extrapolated,
+    /// After the force update (p + Δt f; forces adjusted by ±Δp/Δt).
+    Forces,
+    /// After re-extrapolation (momentum q).
+    Reextrapolated,
+}
 
 /// A point of a crack: its line position and its two surfaces.
 #[derive(Debug, Clone, Copy, PartialEq)]

@@ -18,6 +18,7 @@ use fracture_api::{Scene, ValidScene};
 use rayon::prelude::*;
 
 use crate::crack::Cracks;
+pub use crate::crack::Stage;
 use crate::grid::{
     GridGeom, GridMut, Node, PAD, Reduce, STRIP, field0_columns, for_strips, visit_stencil,
 };
@@ -938,17 +939,6 @@ impl Simulation {
             strip_bounds: &self.strip_bounds,
         }
     }
-}
-
-/// The momentum stage at which contact is applied (`algorithm.md` §4, pitfall 4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stage {
-    /// After P2G (momentum p).
-    Extrapolated,
-    /// After the force update (p + Δt f; forces adjusted by ±Δp/Δt).
-    Forces,
-    /// After re-extrapolation (momentum q).
-    Reextrapolated,
 }
 
 /// Accumulate the stencil's contribution into the active box of `acc`.
