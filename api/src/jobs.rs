@@ -10,7 +10,9 @@ use crate::results::{Progress, Summary};
 use crate::scene::Scene;
 
 /// State of a job.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Hash, Serialize, Deserialize, JsonSchema, utoipa::ToSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum JobStatus {
     /// Waiting for a worker.
@@ -72,7 +74,7 @@ pub struct JobRequest {
 }
 
 /// A job as the API returns it.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
 pub struct JobInfo {
     /// Job id.
     pub id: String,
@@ -84,8 +86,9 @@ pub struct JobInfo {
     pub labels: BTreeMap<String, String>,
     /// Priority.
     pub priority: i64,
-    /// The scene (omitted in lists).
+    /// The scene (omitted in lists; its JSON Schema: `fracture schema`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(value_type = Option<Object>)]
     pub scene: Option<Scene>,
     /// RFC 3339 UTC.
     pub created_at: String,
@@ -107,7 +110,7 @@ pub struct JobInfo {
 }
 
 /// One problem in an error body.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
 pub struct ErrorDetail {
     /// JSON path of the offending field, e.g. `materials.plate.poissons_ratio`.
     pub path: String,
@@ -116,7 +119,7 @@ pub struct ErrorDetail {
 }
 
 /// The body of every API error.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
 pub struct ErrorBody {
     /// Kind of error, e.g. `invalid_scene`, `not_found`.
     pub error: String,
@@ -128,7 +131,7 @@ pub struct ErrorBody {
 }
 
 /// `GET /api/v1/health`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
 pub struct HealthInfo {
     /// `"ok"`.
     pub status: String,
@@ -141,7 +144,7 @@ pub struct HealthInfo {
 }
 
 /// `POST /api/v1/scenes/validate` for a valid scene.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
 pub struct ValidateResponse {
     /// Always `true` (an invalid scene gets 422).
     pub valid: bool,
@@ -156,7 +159,7 @@ pub struct ValidateResponse {
 }
 
 /// One entry of `GET /api/v1/jobs/{id}/snapshots`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
 pub struct SnapshotInfo {
     /// Index of the snapshot in its run.
     pub index: u32,
@@ -169,18 +172,19 @@ pub struct SnapshotInfo {
 }
 
 /// One built-in example scene (`GET /api/v1/scenes`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
 pub struct SceneEntry {
     /// File name without `.json`.
     pub name: String,
     /// The scene's description.
     pub description: String,
     /// The scene document.
+    #[schema(value_type = Object)]
     pub scene: serde_json::Value,
 }
 
 /// The `status` event of a job's event stream (also sent first to a late subscriber).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
 pub struct StatusEvent {
     /// Job id.
     pub id: String,

@@ -4,6 +4,11 @@
 
 use serde::{Deserialize, Deserializer};
 
+/// NaN, the serde default of a number a row may lack (rows written before the column).
+pub fn nan() -> f64 {
+    f64::NAN
+}
+
 /// Deserialize an `f64` that may be `null` (read as NaN).
 pub fn f64_or_nan<'de, D: Deserializer<'de>>(d: D) -> Result<f64, D::Error> {
     Ok(Option::<f64>::deserialize(d)?.unwrap_or(f64::NAN))

@@ -9,7 +9,7 @@ use serde::{Deserialize, Serialize};
 use crate::results::{CrackTipRow, EnergyRow, Progress, Summary};
 
 /// `POST /api/v1/worker/claim`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct ClaimRequest {
     /// Who asks (for the job record and the logs).
     pub worker_id: String,
@@ -19,7 +19,7 @@ pub struct ClaimRequest {
 }
 
 /// A claimed job (200 from claim; 204 means no job within the wait).
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct Claim {
     /// Job id.
     pub job_id: String,
@@ -28,13 +28,14 @@ pub struct Claim {
     /// Attempt number (1 for the first claim).
     pub attempt: u32,
     /// The scene, as JSON.
+    #[schema(value_type = Object)]
     pub scene: serde_json::Value,
     /// How long the lease lasts without a heartbeat (s).
     pub lease_seconds: f64,
 }
 
 /// `POST /api/v1/worker/jobs/{id}/heartbeat`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct Heartbeat {
     /// Fencing token.
     pub fence: i64,
@@ -44,7 +45,7 @@ pub struct Heartbeat {
 }
 
 /// Reply to a heartbeat.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct HeartbeatReply {
     /// The job was cancelled: stop it and finish with a cancelled summary.
     pub cancel: bool,
@@ -53,7 +54,7 @@ pub struct HeartbeatReply {
 }
 
 /// `POST /api/v1/worker/jobs/{id}/energy`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct EnergyBatch {
     /// Fencing token.
     pub fence: i64,
@@ -62,7 +63,7 @@ pub struct EnergyBatch {
 }
 
 /// `POST /api/v1/worker/jobs/{id}/crack-tips`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct CrackTipBatch {
     /// Fencing token.
     pub fence: i64,
@@ -71,7 +72,7 @@ pub struct CrackTipBatch {
 }
 
 /// `POST /api/v1/worker/jobs/{id}/finish`.
-#[derive(Debug, Clone, Serialize, Deserialize)]
+#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema)]
 pub struct FinishRequest {
     /// Fencing token.
     pub fence: i64,

@@ -7,35 +7,45 @@ use serde::{Deserialize, Serialize};
 /// Column header of `energy.csv`.
 pub const ENERGY_CSV_HEADER: &str = "time,kinetic,strain,external_work,dissipated,total_error";
 /// Column header of `crack_tips.csv`.
-pub const CRACK_TIPS_CSV_HEADER: &str = "time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing";
+/// Column header of `crack_tips.csv`: `run-output.md`'s columns, then (an extension, at the
+/// end) the path-independence report and the crack-opening K.
+pub const CRACK_TIPS_CSV_HEADER: &str = "time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing,j1_half,j2_half,j1_double,j2_double,k1_cod,k2_cod";
 
 /// One energy sample (J per the scene's thickness). Every number may be NaN (written as
 /// JSON `null`, read back as NaN: [`crate::nan`]).
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, JsonSchema, utoipa::ToSchema,
+)]
 pub struct EnergyRow {
     /// Simulated time (s).
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub time: f64,
     /// Kinetic energy Σ ½ m |v|².
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub kinetic: f64,
     /// Strain energy Σ V W.
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub strain: f64,
     /// Work done on the body by boundary conditions and loads.
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub external_work: f64,
     /// Energy removed by friction, damping and crack growth.
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub dissipated: f64,
     /// kinetic + strain + dissipated − external_work − initial total.
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub total_error: f64,
 }
 
@@ -56,11 +66,14 @@ impl EnergyRow {
 
 /// One crack-tip sample. A number not defined for this sample (a K of an intersonic tip, a J
 /// whose domain left the grid) is NaN, written as JSON `null` and read back as NaN.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, JsonSchema, utoipa::ToSchema,
+)]
 pub struct CrackTipRow {
     /// Simulated time (s).
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub time: f64,
     /// Index into `scene.cracks`.
     pub crack: u32,
@@ -69,37 +82,93 @@ pub struct CrackTipRow {
     /// Tip position x (m).
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub x: f64,
     /// Tip position y (m).
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub y: f64,
     /// Current crack length along its path (m).
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub length: f64,
     /// Tip speed (m/s), moving-box average over `output.speed_window`.
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub speed: f64,
     /// J along the crack (J/m²), tip frame.
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub j1: f64,
     /// J normal to the crack (J/m²), positive to the crack's left.
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub j2: f64,
     /// Mode I stress intensity factor (Pa·√m).
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub k1: f64,
     /// Mode II stress intensity factor (Pa·√m).
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
     pub k2: f64,
     /// Whether the tip advanced in this sample's step.
     pub growing: bool,
+    /// J1 of the domain integral at half the J radius (path-independence report; J/m²). NaN (null) where not defined.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub j1_half: f64,
+    /// J2 at half the J radius. NaN (null) where not defined.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub j2_half: f64,
+    /// J1 at twice the J radius. NaN (null) where not defined.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub j1_double: f64,
+    /// J2 at twice the J radius. NaN (null) where not defined.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub j2_double: f64,
+    /// K_I by the crack-opening ratio (the seed's method, for comparison; Pa·√m). NaN (null) where not defined.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub k1_cod: f64,
+    /// K_II by the crack-opening ratio. NaN (null) where not defined.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub k2_cod: f64,
 }
 
 impl CrackTipRow {
@@ -119,12 +188,17 @@ impl CrackTipRow {
             self.k1,
             self.k2,
             u8::from(self.growing)
+        ) + &format!(
+            ",{:e},{:e},{:e},{:e},{:e},{:e}",
+            self.j1_half, self.j2_half, self.j1_double, self.j2_double, self.k1_cod, self.k2_cod
         )
     }
 }
 
 /// Final state of a run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum RunStatus {
     /// Reached the end time.
@@ -136,7 +210,9 @@ pub enum RunStatus {
 }
 
 /// The kind of a failed run.
-#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema,
+)]
 #[serde(rename_all = "snake_case")]
 pub enum FailureKind {
     /// The scene did not validate (deterministic).
@@ -150,7 +226,7 @@ pub enum FailureKind {
 }
 
 /// `summary.json`.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
 pub struct Summary {
     /// How the run ended.
     pub status: RunStatus,
@@ -186,7 +262,9 @@ pub struct Summary {
 }
 
 /// Progress of a run.
-#[derive(Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+#[derive(
+    Debug, Clone, Copy, PartialEq, Default, Serialize, Deserialize, JsonSchema, utoipa::ToSchema,
+)]
 pub struct Progress {
     /// Steps taken.
     pub step: u64,

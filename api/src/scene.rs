@@ -303,14 +303,50 @@ pub struct Crack {
     /// Propagation criterion.
     #[serde(default)]
     pub propagation: Propagation,
-    /// (extension) Half-size of the square J-integral contour, in cells (default 2, as
-    /// NairnMPM). Must be at least 1.
-    #[serde(default = "default_contour")]
-    pub j_contour: u32,
+    /// (extension, the old spelling of `{"j_integral": {"method": "contour", "cells": n}}`)
+    /// Half-size of the square J-integral contour, in cells. Used only when `j_integral` is
+    /// absent.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub j_contour: Option<u32>,
+    /// How J is evaluated at this crack's tips (`scene-format.md`); default
+    /// [`JIntegral::default_for`]: the domain integral over a ring of radius 6 cells.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub j_integral: Option<JIntegral>,
 }
 
-fn default_contour() -> u32 {
-    2
+/// How the J-integral of a tip is evaluated (`algorithm.md` §6).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(tag = "method", rename_all = "snake_case", deny_unknown_fields)]
+pub enum JIntegral {
+    /// Equivalent domain integral over a ring around the tip: weight q = 1 inside r/2,
+    /// falling linearly to 0 at r = `radius` (m), every particle with its own field's
+    /// values, the inertial terms and the crack-face traction term.
+    Domain {
+        /// Outer radius of the ring (m), at least two cells.
+        radius: f64,
+    },
+    /// The seed's square grid-line contour of half-size `cells`, plus the area term.
+    Contour {
+        /// Half-size in cells (1..=16).
+        cells: u32,
+    },
+}
+
+impl JIntegral {
+    /// Cells of the default domain radius.
+    pub const DEFAULT_RADIUS_CELLS: f64 = 6.0;
+
+    /// The method of a crack: its `j_integral`, else its `j_contour` (old spelling), else
+    /// the domain integral with radius [`Self::DEFAULT_RADIUS_CELLS`]·`cell_size`.
+    pub fn default_for(crack: &Crack, cell_size: f64) -> JIntegral {
+        match (crack.j_integral, crack.j_contour) {
+            (Some(j), _) => j,
+            (None, Some(cells)) => JIntegral::Contour { cells },
+            (None, None) => JIntegral::Domain {
+                radius: Self::DEFAULT_RADIUS_CELLS * cell_size,
+            },
+        }
+    }
 }
 
 /// Crack-face contact law.
@@ -349,14 +385,20 @@ pub enum Propagation {
     },
 }
 
-/// Direction in which a tip grows.
+/// Direction in which a tip grows (`algorithm.md` §7).
 #[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum GrowthDirection {
-    /// θ = atan2(J2, J1) in the tip frame; G = sqrt(J1² + J2²).
+    /// The kink angle of largest energy release of a kinked extension, from K_I and K_II
+    /// (the kinked-crack solution of Hussain, Pu & Underwood 1974: ∓75.2° for pure mode II);
+    /// G is the energy release rate of that kink.
     #[default]
     MaxEnergyRelease,
-    /// Growth constrained along a fixed global direction; G = J1 cosθ + J2 sinθ along it.
+    /// Erdogan–Sih: the angle of largest hoop stress, θ = 2 atan[(K_I − √(K_I² + 8K_II²))/
+    /// (4K_II)] (∓70.5° for pure mode II); G is the energy release rate of that kink.
+    MaxHoopStress,
+    /// Growth constrained to a material line of the undeformed body (a bond, a weak plane)
+    /// along this direction; G = J1 of the tip frame (the tip segment lies along it).
     Fixed(Vec2),
 }
 

@@ -88,10 +88,8 @@ pub struct SweepJob {
     /// Job name (the scene's name and the label).
     pub name: String,
     /// Current state.
-    #[schema(value_type = String)]
     pub status: JobStatus,
     /// Progress of the run.
-    #[schema(value_type = Option<Object>)]
     pub progress: Option<Progress>,
     /// RFC 3339 UTC.
     pub started_at: Option<String>,
@@ -100,7 +98,6 @@ pub struct SweepJob {
     /// Why the job failed or was cancelled.
     pub message: Option<String>,
     /// The run summary once finished.
-    #[schema(value_type = Option<Object>)]
     pub summary: Option<Summary>,
 }
 

@@ -11,7 +11,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::lattice;
 use crate::scene::{
-    Analysis, ContactLaw, Damping, FieldKind, GrowthDirection, Propagation, Region, Scene, Vec2,
+    Analysis, ContactLaw, Damping, FieldKind, GrowthDirection, JIntegral, Propagation, Region,
+    Scene, Vec2,
 };
 
 /// One validation problem.
@@ -244,8 +245,10 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
                 format!("must be above and to the right of grid.min {:?}", g.min),
             );
         } else {
-            let nx = ((g.max[0] - g.min[0]) / h - 1e-9).ceil() as u64 + 1;
-            let ny = ((g.max[1] - g.min[1]) / h - 1e-9).ceil() as u64 + 1;
+            // `as u64` saturates on huge spans; the + 1 must too (grids beyond 2⁶⁴ nodes a
+            // side are refused below, not wrapped to a small count).
+            let nx = (((g.max[0] - g.min[0]) / h - 1e-9).ceil() as u64).saturating_add(1);
+            let ny = (((g.max[1] - g.min[1]) / h - 1e-9).ceil() as u64).saturating_add(1);
             grid_nodes = nx.saturating_mul(ny);
             if grid_nodes > 200_000_000 {
                 c.err(
@@ -390,12 +393,39 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
                 }
             }
         }
-        if cr.j_contour == 0 || cr.j_contour > 16 {
-            c.err(
-                format!("{p}.j_contour"),
-                cr.j_contour,
-                "is outside 1..=16 cells",
-            );
+        if let Some(n) = cr.j_contour
+            && (n == 0 || n > 16)
+        {
+            c.err(format!("{p}.j_contour"), n, "is outside 1..=16 cells");
+        }
+        match cr.j_integral {
+            Some(JIntegral::Contour { cells }) if cells == 0 || cells > 16 => {
+                c.err(
+                    format!("{p}.j_integral.cells"),
+                    cells,
+                    "is outside 1..=16 cells",
+                );
+            }
+            Some(JIntegral::Domain { radius }) => {
+                let rp = format!("{p}.j_integral.radius");
+                c.positive(&rp, radius);
+                if radius.is_finite()
+                    && radius > 0.0
+                    && h.is_finite()
+                    && h > 0.0
+                    && radius < 2.0 * h
+                {
+                    c.err(
+                        rp,
+                        radius,
+                        format!(
+                            "is under two cells ({:e} m): the ring would not hold enough particles",
+                            2.0 * h
+                        ),
+                    );
+                }
+            }
+            _ => {}
         }
         if let ContactLaw::Coulomb { friction } = cr.contact {
             c.non_negative(&format!("{p}.contact.friction"), friction);
@@ -492,7 +522,16 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
     let mut steps = 0;
     if c.errors.is_empty() {
         let s = (scene.time.end / time_step * (1.0 - 1e-12)).ceil();
-        if !(s.is_finite() && s < 1e12) {
+        if !(time_step.is_finite() && time_step > 0.0) {
+            // A density or modulus so extreme that c_L (and so Δt) is not a number: name the
+            // material constants rather than "NaN steps".
+            c.err(
+                "materials",
+                time_step,
+                "give a wave speed c_L = √(E(1−ν)/((1+ν)(1−2ν)ρ)) that is not a finite \
+                 positive number (check density and youngs_modulus), so there is no time step",
+            );
+        } else if !(s.is_finite() && s < 1e12) {
             c.err(
                 "time.end",
                 scene.time.end,

@@ -32,6 +32,14 @@ pub struct WorkerArgs {
     /// Exit when this process is no longer the parent (set for a server's local workers).
     #[arg(long, hide = true)]
     pub parent_pid: Option<u32>,
+    /// First part of this worker's id, `PREFIX-PID-RANDOM` (default: the host name; a
+    /// server names its local workers `local<slot>` so it can tell which jobs a dead one
+    /// held).
+    #[arg(long, hide = true)]
+    pub worker_name: Option<String>,
+    /// Fail jobs whose memory estimate exceeds this many bytes before building them.
+    #[arg(long, env = "FRACTURE_WORKER_MAX_MEMORY_BYTES")]
+    pub max_memory_bytes: Option<u64>,
 }
 
 /// Arguments of `fracture submit`.
@@ -246,7 +254,13 @@ pub fn worker(a: WorkerArgs) -> ExitCode {
         flush_every: Duration::from_millis(a.flush_ms.max(10)),
         give_up: Duration::from_secs(a.give_up_seconds),
         parent_pid: a.parent_pid,
-        worker_id: format!("{host}-{}-{}", std::process::id(), random_hex(3)),
+        worker_id: format!(
+            "{}-{}-{}",
+            a.worker_name.unwrap_or(host),
+            std::process::id(),
+            random_hex(3)
+        ),
+        max_memory: a.max_memory_bytes,
     };
     match remote::run_worker(cfg) {
         Ok(()) => ExitCode::SUCCESS,

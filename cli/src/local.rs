@@ -216,17 +216,38 @@ pub fn run(scene: &Path, out: &Path, threads: Parallelism) -> ExitCode {
     }
 }
 
+/// Write `text` to stdout; a reader that went away (`fracture validate x | head`) is not an
+/// error worth a panic: the output is simply not wanted any more.
+fn print_out(text: &str) -> ExitCode {
+    use std::io::Write;
+    let mut out = std::io::stdout().lock();
+    match out.write_all(text.as_bytes()).and_then(|()| out.flush()) {
+        Ok(()) => ExitCode::SUCCESS,
+        Err(e) if e.kind() == std::io::ErrorKind::BrokenPipe => ExitCode::SUCCESS,
+        Err(e) => {
+            eprintln!("error: cannot write the output: {e}");
+            ExitCode::from(EXIT_ERROR)
+        }
+    }
+}
+
 /// `fracture validate`.
 pub fn validate(scene: &Path) -> ExitCode {
     match load_scene(scene) {
         Ok(scene) => {
             let size = scene.size();
-            println!("{}: valid", scene.name);
-            println!("particles: {}", size.particles);
-            println!("grid nodes: {}", size.grid_nodes);
-            println!("time step: {:e} s", size.time_step);
-            println!("steps: {}", size.steps);
-            ExitCode::SUCCESS
+            let est = fracture_api::cost::memory_estimate(&scene, size.particles);
+            print_out(&format!(
+                "{}: valid\nparticles: {}\ngrid nodes: {}\ntime step: {:e} s\nsteps: {}\n\
+                 particle-steps: {:e}\nmemory (estimate): {}\n",
+                scene.name,
+                size.particles,
+                size.grid_nodes,
+                size.time_step,
+                size.steps,
+                fracture_api::cost::particle_steps(size.particles, size.steps) as f64,
+                est
+            ))
         }
         Err(e) => e.report(),
     }
@@ -235,10 +256,7 @@ pub fn validate(scene: &Path) -> ExitCode {
 /// `fracture schema`.
 pub fn schema() -> ExitCode {
     match serde_json::to_string_pretty(&Scene::json_schema()) {
-        Ok(s) => {
-            println!("{s}");
-            ExitCode::SUCCESS
-        }
+        Ok(s) => print_out(&format!("{s}\n")),
         Err(e) => {
             eprintln!("error: {e}");
             ExitCode::from(EXIT_ERROR)

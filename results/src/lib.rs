@@ -2,10 +2,14 @@
 //!
 //! * [`mcapfile`]: the `fields.mcap` file (writer and readers; channels in `docs/mcap.md`).
 //! * [`codec`]: the binary snapshot encoding of worker uploads and the store.
-//! * [`render`]: field snapshots as PNG images (colour maps, isochromatic fringes).
+//! * [`render`]: field snapshots as PNG images (colour maps, isochromatic fringes resolved
+//!   between the nodes, legends with units).
+//! * [`vtk`]: snapshots as VTK files (ImageData grids, PolyData cracks, `.pvd` time series)
+//!   for ParaView.
 //!
 //! This crate runs no physics: it reads and writes what the solver produced.
 
 pub mod codec;
 pub mod mcapfile;
 pub mod render;
+pub mod vtk;

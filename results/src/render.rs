@@ -1,9 +1,30 @@
-//! Field snapshots rendered as PNG images: a perceptual colour map (viridis for magnitudes,
-//! a diverging map centred on zero for signed quantities, a dark-field isochromatic picture
-//! `I ∝ sin²(πN)` for `fringe`), a colour scale bar with its range, and the cracks on top.
+//! Field snapshots rendered as PNG images that hold up at the resolution a reader looks at.
+//!
+//! * The nodal field is resampled to pixels finer than the grid ([`RenderOptions`]: pixels
+//!   per cell or picture width; by default at least 4 pixels per cell), bilinearly from the
+//!   four nodes around each pixel centre, empty (NaN) nodes left out ([`raster`]).
+//! * Isochromatics: the fringe order N (or the stresses, with [`RenderOptions::fringe_per_pa`])
+//!   is interpolated first and the dark-field intensity I = sin²(πN) taken per pixel after, so
+//!   fringes are resolved between the nodes instead of aliasing into noise where N changes by
+//!   more than half a fringe per cell. Where N still changes by more than one fringe per
+//!   pixel, [`RenderReport::aliased`] is set and the legend says so.
+//! * Colour maps: viridis for magnitudes, a diverging map centred on zero for signed
+//!   quantities, categorical colours for `material` (nearest node, never interpolated).
+//! * Legend: the quantity and its unit with an SI prefix chosen for the range (`σxx (MPa)`,
+//!   `|v| (m/s)`, `fringe order N`), tick values on the colour bar, a length scale bar, the
+//!   time, and the sampling; text in an embedded 5×7 font of our own, no font files.
+//! * Cracks are drawn on top, light with a dark outline so they show on any map.
 
-use fracture_api::results::Snapshot;
+mod canvas;
+mod font;
+mod legend;
+pub mod raster;
+
+use canvas::{Canvas, plain};
+use fracture_api::results::{FieldComponent, Snapshot};
 use fracture_api::scene::FieldKind;
+use legend::{Layout, Quantity, notes};
+use raster::{Raster, Source};
 
 /// Why a field could not be rendered.
 #[derive(Debug, thiserror::Error)]
@@ -11,9 +32,98 @@ pub enum RenderError {
     /// The snapshot has no such component or field.
     #[error("the snapshot has no field or component named `{0}`")]
     UnknownField(String),
+    /// The options ask for an impossible or too large picture.
+    #[error("bad render options: {0}")]
+    BadOptions(String),
     /// PNG encoding failed.
     #[error("png encoding failed: {0}")]
     Encode(String),
+}
+
+/// The most pixels the field area of one picture may have (about 6000 × 6000).
+pub const MAX_PLOT_PIXELS: u64 = 36_000_000;
+/// Pixels per cell when nothing is asked: at least this many, more for small grids.
+pub const MIN_DEFAULT_PX_PER_CELL: f64 = 4.0;
+/// A fringe order changing by more than this between adjacent pixels is aliased.
+pub const ALIAS_FRINGES_PER_PIXEL: f64 = 1.0;
+
+/// How to render a field picture. `Default` gives the automatic size (at least
+/// [`MIN_DEFAULT_PX_PER_CELL`] pixels per cell, about 960 pixels on the long side for small
+/// grids), the data range, cracks and the legend.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderOptions {
+    /// Pixels per cell (node spacing), > 0. Takes precedence over `width`.
+    pub px_per_cell: Option<f64>,
+    /// Width of the field area in pixels (the legend comes on top), when `px_per_cell` is
+    /// not given.
+    pub width: Option<u32>,
+    /// Fixed colour range in SI units (Pa, m/s, m, …) instead of the data range, e.g. to
+    /// compare the snapshots of a series; for signed maps the larger magnitude is used
+    /// symmetrically. Ignored for fringes and materials.
+    pub range: Option<[f64; 2]>,
+    /// Fringes per pascal of σ1 − σ2 (h/f_σ, thickness over the material fringe constant).
+    /// When given and the snapshot holds `sxx`, `syy`, `sxy`, the fringe order is computed per
+    /// pixel from the interpolated stresses; otherwise the nodal `fringe` order is
+    /// interpolated.
+    pub fringe_per_pa: Option<f64>,
+    /// Draw the cracks.
+    pub cracks: bool,
+    /// Draw the legend (title, colour bar, length scale, notes); without it the PNG is the
+    /// field area alone.
+    pub legend: bool,
+}
+
+impl Default for RenderOptions {
+    fn default() -> Self {
+        RenderOptions {
+            px_per_cell: None,
+            width: None,
+            range: None,
+            fringe_per_pa: None,
+            cracks: true,
+            legend: true,
+        }
+    }
+}
+
+/// What a render produced, besides the image.
+#[derive(Debug, Clone, PartialEq)]
+pub struct RenderReport {
+    /// The snapshot component rendered (`fringe`, `sxx`, …).
+    pub component: String,
+    /// Quantity and unit as in the legend, e.g. `σxx (MPa)`.
+    pub label: String,
+    /// Size of the whole PNG.
+    pub width: u32,
+    /// Size of the whole PNG.
+    pub height: u32,
+    /// The field area inside the PNG: x, y of its top-left pixel, width, height.
+    pub plot: [u32; 4],
+    /// Pixels per cell actually used.
+    pub px_per_cell: f64,
+    /// The colour range in SI units (fringes: [0, largest N]).
+    pub range: [f64; 2],
+    /// For fringe pictures: the largest change of N between adjacent pixels.
+    pub max_fringes_per_pixel: Option<f64>,
+    /// Adjacent pixel pairs whose fringe order differs by more than
+    /// [`ALIAS_FRINGES_PER_PIXEL`].
+    pub aliased_pairs: u64,
+    /// The fringe order changes by more than one fringe per pixel somewhere: those fringes
+    /// are not resolved (more pixels per cell, or a finer grid, would resolve them). Near a
+    /// crack tip, where the grid's N jumps by many fringes per cell, this is expected; see
+    /// `aliased_box` for where.
+    pub aliased: bool,
+    /// The box (m: x0, y0, x1, y1) around the aliased pixel pairs.
+    pub aliased_box: Option<[f64; 4]>,
+}
+
+/// A rendered picture.
+#[derive(Debug, Clone)]
+pub struct Rendered {
+    /// The PNG file.
+    pub png: Vec<u8>,
+    /// What was drawn.
+    pub report: RenderReport,
 }
 
 /// The component a field kind renders by default.
@@ -29,10 +139,7 @@ pub fn default_component(kind: FieldKind) -> &'static str {
 }
 
 /// Resolve a URL field name (component or kind) to a component of the snapshot.
-pub fn resolve<'a>(
-    snap: &'a Snapshot,
-    field: &str,
-) -> Option<&'a fracture_api::results::FieldComponent> {
+pub fn resolve<'a>(snap: &'a Snapshot, field: &str) -> Option<&'a FieldComponent> {
     snap.component(field).or_else(|| {
         FieldKind::from_name(field).and_then(|k| {
             snap.component(default_component(k)).or_else(|| {
@@ -44,7 +151,154 @@ pub fn resolve<'a>(
     })
 }
 
-#[derive(Clone, Copy, PartialEq)]
+/// Render one field of a snapshot as a PNG with the default options.
+pub fn render_png(snap: &Snapshot, field: &str) -> Result<Vec<u8>, RenderError> {
+    render_png_with(snap, field, &RenderOptions::default()).map(|r| r.png)
+}
+
+/// Render one field of a snapshot as a PNG, with its report.
+pub fn render_png_with(
+    snap: &Snapshot,
+    field: &str,
+    opts: &RenderOptions,
+) -> Result<Rendered, RenderError> {
+    let (name, raster) = rasterize(snap, field, opts)?;
+    let map = map_for(&name);
+    let q = Quantity::of(&name);
+    let data_range = raster.range().unwrap_or([0.0, 0.0]);
+    let range = match map {
+        Map::Fringe => [0.0, data_range[1].max(0.0)],
+        Map::Categorical => data_range,
+        Map::Diverging => {
+            let [lo, hi] = opts.range.unwrap_or(data_range);
+            let m = lo.abs().max(hi.abs());
+            [-m, m]
+        }
+        Map::Sequential => opts.range.unwrap_or(data_range),
+    };
+    let (max_step, aliased_pairs, aliased_box) = if map == Map::Fringe {
+        let (m, n, b) = raster.max_step(ALIAS_FRINGES_PER_PIXEL);
+        (Some(m), n, b)
+    } else {
+        (None, 0, None)
+    };
+    let aliased = aliased_pairs > 0;
+    let label = q.label(range);
+    let notes = notes(snap, &raster, max_step, aliased_box);
+    let layout = Layout::new(&raster, opts.legend, snap, &label, map, range, &q, &notes);
+    let mut c = Canvas::new(layout.w, layout.h, BG);
+    let (x0, y0) = (layout.plot[0] as i64, layout.plot[1] as i64);
+    paint_field(&mut c, &raster, map, range, (x0, y0));
+    if opts.cracks {
+        draw_cracks(&mut c, snap, &raster, map, (x0, y0));
+    }
+    if opts.legend {
+        layout.draw(&mut c, &label, map, range, &q, &notes, snap, &raster);
+    }
+    let report = RenderReport {
+        component: name,
+        label: plain(&label),
+        width: layout.w as u32,
+        height: layout.h as u32,
+        plot: layout.plot,
+        px_per_cell: raster.px_per_cell(),
+        range,
+        max_fringes_per_pixel: max_step,
+        aliased_pairs,
+        aliased,
+        aliased_box,
+    };
+    Ok(Rendered {
+        png: encode(&c)?,
+        report,
+    })
+}
+
+/// Resample a field of a snapshot to the pixels of its picture (without drawing): the
+/// component rendered and its per-pixel values (for `fringe`: the fringe order N).
+pub fn rasterize(
+    snap: &Snapshot,
+    field: &str,
+    opts: &RenderOptions,
+) -> Result<(String, Raster), RenderError> {
+    let stresses = (
+        snap.component("sxx"),
+        snap.component("syy"),
+        snap.component("sxy"),
+    );
+    let wants_fringe = field == "fringe" || FieldKind::from_name(field) == Some(FieldKind::Fringe);
+    let (name, source) = match (wants_fringe, opts.fringe_per_pa, stresses) {
+        (true, Some(per_pa), (Some(a), Some(b), Some(s))) => {
+            if !(per_pa.is_finite() && per_pa > 0.0) {
+                return Err(RenderError::BadOptions(format!(
+                    "fringe_per_pa must be a positive number, not {per_pa}"
+                )));
+            }
+            (
+                "fringe".to_string(),
+                Source::FringeFromStress {
+                    sxx: &a.values,
+                    syy: &b.values,
+                    sxy: &s.values,
+                    per_pa,
+                },
+            )
+        }
+        _ => {
+            let comp =
+                resolve(snap, field).ok_or_else(|| RenderError::UnknownField(field.to_string()))?;
+            let src = if map_for(&comp.name) == Map::Categorical {
+                Source::Nearest(&comp.values)
+            } else {
+                Source::Linear(&comp.values)
+            };
+            (comp.name.clone(), src)
+        }
+    };
+    let (w, h) = plot_size(snap, opts)?;
+    Ok((name, Raster::build(snap, &source, w, h)))
+}
+
+/// The field area's size in pixels for these options.
+fn plot_size(snap: &Snapshot, opts: &RenderOptions) -> Result<(usize, usize), RenderError> {
+    let cx = (snap.nx.max(2) - 1) as f64;
+    let cy = (snap.ny.max(2) - 1) as f64;
+    let ppc = match (opts.px_per_cell, opts.width) {
+        (Some(p), _) => {
+            if !(p.is_finite() && p > 0.0) {
+                return Err(RenderError::BadOptions(format!(
+                    "px_per_cell must be a positive number, not {p}"
+                )));
+            }
+            p
+        }
+        (None, Some(w)) => {
+            if w == 0 {
+                return Err(RenderError::BadOptions("width must be at least 1".into()));
+            }
+            w as f64 / cx
+        }
+        (None, None) => {
+            // Small grids get ~960 px on the long side, large ones 4 px per cell, all
+            // within the pixel budget.
+            let auto = (960.0 / cx.max(cy))
+                .ceil()
+                .clamp(MIN_DEFAULT_PX_PER_CELL, 32.0);
+            auto.min((MAX_PLOT_PIXELS as f64 / (cx * cy)).sqrt())
+        }
+    };
+    let w = (cx * ppc).round().max(1.0);
+    let h = (cy * ppc).round().max(1.0);
+    if w * h > MAX_PLOT_PIXELS as f64 {
+        return Err(RenderError::BadOptions(format!(
+            "{w} × {h} pixels is more than the {MAX_PLOT_PIXELS} allowed; ask for fewer pixels \
+             per cell"
+        )));
+    }
+    Ok((w as usize, h as usize))
+}
+
+#[derive(Clone, Copy, PartialEq, Debug)]
 enum Map {
     Sequential,
     Diverging,
@@ -61,86 +315,24 @@ fn map_for(name: &str) -> Map {
     }
 }
 
-const EMPTY: [u8; 3] = [38, 38, 44];
 const BG: [u8; 3] = [255, 255, 255];
 const INK: [u8; 3] = [20, 20, 20];
-
-struct Canvas {
-    w: usize,
-    h: usize,
-    px: Vec<u8>,
-}
-
-impl Canvas {
-    fn new(w: usize, h: usize) -> Canvas {
-        let mut px = vec![0u8; w * h * 3];
-        for p in px.chunks_exact_mut(3) {
-            p.copy_from_slice(&BG);
-        }
-        Canvas { w, h, px }
-    }
-    fn set(&mut self, x: i64, y: i64, c: [u8; 3]) {
-        if x >= 0 && y >= 0 && (x as usize) < self.w && (y as usize) < self.h {
-            let i = (y as usize * self.w + x as usize) * 3;
-            self.px[i..i + 3].copy_from_slice(&c);
-        }
-    }
-    fn line(&mut self, (x0, y0): (f64, f64), (x1, y1): (f64, f64), c: [u8; 3], r: i64) {
-        let n = ((x1 - x0).abs().max((y1 - y0).abs()).ceil() as usize).clamp(1, 100_000);
-        for i in 0..=n {
-            let t = i as f64 / n as f64;
-            let x = (x0 + t * (x1 - x0)).round() as i64;
-            let y = (y0 + t * (y1 - y0)).round() as i64;
-            for dy in -r..=r {
-                for dx in -r..=r {
-                    self.set(x + dx, y + dy, c);
-                }
-            }
-        }
-    }
-    fn text(&mut self, x: i64, y: i64, s: &str, scale: i64) {
-        let mut cx = x;
-        for ch in s.chars() {
-            let g = glyph(ch);
-            for (row, bits) in g.iter().enumerate() {
-                for col in 0..3 {
-                    if bits & (0b100 >> col) != 0 {
-                        for sy in 0..scale {
-                            for sx in 0..scale {
-                                self.set(cx + col * scale + sx, y + row as i64 * scale + sy, INK);
-                            }
-                        }
-                    }
-                }
-            }
-            cx += 4 * scale;
-        }
-    }
-}
-
-/// A 3×5 pixel font for numbers.
-fn glyph(c: char) -> [u8; 5] {
-    match c {
-        '0' => [0b111, 0b101, 0b101, 0b101, 0b111],
-        '1' => [0b010, 0b110, 0b010, 0b010, 0b111],
-        '2' => [0b111, 0b001, 0b111, 0b100, 0b111],
-        '3' => [0b111, 0b001, 0b111, 0b001, 0b111],
-        '4' => [0b101, 0b101, 0b111, 0b001, 0b001],
-        '5' => [0b111, 0b100, 0b111, 0b001, 0b111],
-        '6' => [0b111, 0b100, 0b111, 0b101, 0b111],
-        '7' => [0b111, 0b001, 0b010, 0b010, 0b010],
-        '8' => [0b111, 0b101, 0b111, 0b101, 0b111],
-        '9' => [0b111, 0b101, 0b111, 0b001, 0b111],
-        '.' => [0b000, 0b000, 0b000, 0b000, 0b010],
-        '-' => [0b000, 0b000, 0b111, 0b000, 0b000],
-        '+' => [0b000, 0b010, 0b111, 0b010, 0b000],
-        'e' => [0b000, 0b111, 0b111, 0b100, 0b111],
-        _ => [0; 5],
-    }
-}
+const WARN: [u8; 3] = [200, 0, 0];
+/// No material: a light checkerboard, unlike any colour of the maps (black..white included).
+const EMPTY: [[u8; 3]; 2] = [[205, 205, 210], [232, 232, 236]];
+const CRACK_CORE: [[u8; 3]; 2] = [[255, 170, 0], [255, 255, 255]];
+const CRACK_EDGE: [u8; 3] = [0, 0, 0];
+const TEXT_SCALE: i64 = 2;
+const MARGIN: i64 = 12;
+const BAR_W: i64 = 18;
+const GAP: i64 = 14;
 
 fn colour(map: Map, t: f64) -> [u8; 3] {
-    let t = t.clamp(0.0, 1.0);
+    let t = if t.is_finite() {
+        t.clamp(0.0, 1.0)
+    } else {
+        0.0
+    };
     match map {
         Map::Sequential => colorous::VIRIDIS.eval_continuous(t).as_array(),
         Map::Diverging => colorous::RED_BLUE.eval_continuous(1.0 - t).as_array(),
@@ -152,120 +344,57 @@ fn colour(map: Map, t: f64) -> [u8; 3] {
     }
 }
 
-/// Render one field of a snapshot as a PNG.
-pub fn render_png(snap: &Snapshot, field: &str) -> Result<Vec<u8>, RenderError> {
-    let comp = resolve(snap, field).ok_or_else(|| RenderError::UnknownField(field.to_string()))?;
-    let map = map_for(&comp.name);
-    let nx = snap.nx.max(1) as usize;
-    let ny = snap.ny.max(1) as usize;
-    let vals = &comp.values;
-    let finite = vals.iter().copied().filter(|v| v.is_finite());
-    let (mut lo, mut hi) = finite.fold((f64::INFINITY, f64::NEG_INFINITY), |(a, b), v| {
-        (a.min(v as f64), b.max(v as f64))
-    });
-    if !lo.is_finite() {
-        lo = 0.0;
-        hi = 0.0;
-    }
+/// The colour of a value: dark-field intensity for fringe orders, position in the range
+/// otherwise.
+fn value_colour(map: Map, range: [f64; 2], v: f64) -> [u8; 3] {
     match map {
-        Map::Diverging => {
-            let m = lo.abs().max(hi.abs());
-            lo = -m;
-            hi = m;
-        }
-        Map::Fringe => {
-            lo = 0.0;
-            hi = 1.0;
-        }
-        _ => {}
-    }
-    let span = if hi > lo { hi - lo } else { 1.0 };
-    // Scale small grids up so the picture is readable; cap the size of large ones.
-    let scale = (480 / nx.max(ny)).clamp(1, 16);
-    let (pw, ph) = (nx * scale, ny * scale);
-    let margin = 10usize;
-    let bar_w = 16usize;
-    let label_w = 70usize;
-    let w = margin + pw + margin + bar_w + 6 + label_w;
-    let h = (margin + ph + margin).max(90);
-    let mut c = Canvas::new(w, h);
-    for iy in 0..ny {
-        for ix in 0..nx {
-            let v = vals.get(iy * nx + ix).copied().unwrap_or(f32::NAN);
-            let rgb = if !v.is_finite() {
-                EMPTY
+        Map::Fringe => colour(map, (std::f64::consts::PI * v).sin().powi(2)),
+        Map::Categorical => colorous::TABLEAU10[(v.max(0.0) as usize) % 10].as_array(),
+        _ => {
+            let span = range[1] - range[0];
+            let t = if span > 0.0 {
+                (v - range[0]) / span
             } else {
-                let v = v as f64;
-                let t = match map {
-                    Map::Fringe => (std::f64::consts::PI * v).sin().powi(2),
-                    Map::Categorical => v,
-                    _ => (v - lo) / span,
-                };
-                if map == Map::Categorical {
-                    colorous::TABLEAU10[(v.max(0.0) as usize) % 10].as_array()
-                } else {
-                    colour(map, t)
-                }
+                0.5
             };
-            // Row 0 is the bottom of the body: flip so +y points up.
-            let py0 = margin + (ny - 1 - iy) * scale;
-            let px0 = margin + ix * scale;
-            for dy in 0..scale {
-                for dx in 0..scale {
-                    c.set((px0 + dx) as i64, (py0 + dy) as i64, rgb);
+            colour(map, t)
+        }
+    }
+}
+
+fn paint_field(c: &mut Canvas, r: &Raster, map: Map, range: [f64; 2], (x0, y0): (i64, i64)) {
+    for j in 0..r.height {
+        for i in 0..r.width {
+            let v = r.get(i, j);
+            let rgb = if v.is_finite() {
+                value_colour(map, range, v)
+            } else {
+                EMPTY[((i / 8) + (j / 8)) % 2]
+            };
+            c.set(x0 + i as i64, y0 + j as i64, rgb);
+        }
+    }
+}
+
+fn draw_cracks(c: &mut Canvas, snap: &Snapshot, r: &Raster, map: Map, (x0, y0): (i64, i64)) {
+    let to_px = |p: &[f64; 2]| {
+        let (x, y) = r.to_pixel(*p);
+        (x0 as f64 + x, y0 as f64 + y)
+    };
+    let width = (r.px_per_cell() / 6.0).round().clamp(1.0, 3.0) as i64;
+    let core = CRACK_CORE[usize::from(map != Map::Fringe)];
+    for pass in 0..2 {
+        for crack in &snap.cracks {
+            for seg in crack.windows(2) {
+                let (a, b) = (to_px(&seg[0]), to_px(&seg[1]));
+                if pass == 0 {
+                    c.line(a, b, CRACK_EDGE, width + 1);
+                } else {
+                    c.line(a, b, core, width);
                 }
             }
         }
     }
-    // Cracks: node (ix, iy) is at origin + (ix, iy)·h; its pixel is that node's square.
-    let h_cell = if snap.cell_size > 0.0 {
-        snap.cell_size
-    } else {
-        1.0
-    };
-    let to_px = |p: &[f64; 2]| {
-        let fx = (p[0] - snap.origin[0]) / h_cell;
-        let fy = (p[1] - snap.origin[1]) / h_cell;
-        (
-            margin as f64 + (fx + 0.5) * scale as f64,
-            margin as f64 + (ny as f64 - 0.5 - fy) * scale as f64,
-        )
-    };
-    let crack_colour = if map == Map::Fringe {
-        [255, 200, 0]
-    } else {
-        [0, 0, 0]
-    };
-    for crack in &snap.cracks {
-        for seg in crack.windows(2) {
-            c.line(to_px(&seg[0]), to_px(&seg[1]), crack_colour, 1);
-        }
-    }
-    // Scale bar with its range.
-    let bx = margin + pw + margin;
-    let bh = ph.max(60);
-    for y in 0..bh {
-        let t = 1.0 - y as f64 / (bh.max(2) - 1) as f64;
-        let rgb = match map {
-            Map::Fringe => colour(map, t),
-            Map::Categorical => colorous::TABLEAU10[(t * 9.0).round() as usize % 10].as_array(),
-            _ => colour(map, t),
-        };
-        for x in 0..bar_w {
-            c.set((bx + x) as i64, (margin + y) as i64, rgb);
-        }
-    }
-    let (top, bottom) = match map {
-        Map::Fringe => ("1".to_string(), "0".to_string()),
-        _ => (format!("{hi:.2e}"), format!("{lo:.2e}")),
-    };
-    let tx = (bx + bar_w + 6) as i64;
-    c.text(tx, margin as i64, &top, 2);
-    c.text(tx, (margin + bh) as i64 - 10, &bottom, 2);
-    if map == Map::Diverging {
-        c.text(tx, (margin + bh / 2) as i64 - 5, "0", 2);
-    }
-    encode(&c)
 }
 
 fn encode(c: &Canvas) -> Result<Vec<u8>, RenderError> {
@@ -284,44 +413,4 @@ fn encode(c: &Canvas) -> Result<Vec<u8>, RenderError> {
 }
 
 #[cfg(test)]
-mod tests {
-    use super::*;
-    use fracture_api::results::FieldComponent;
-
-    #[test]
-    fn renders_signed_and_fringe_fields() {
-        let nx = 21;
-        let ny = 11;
-        let vals: Vec<f32> = (0..nx * ny)
-            .map(|i| if i == 5 { f32::NAN } else { i as f32 - 100.0 })
-            .collect();
-        let snap = Snapshot {
-            index: 0,
-            time: 0.0,
-            nx,
-            ny,
-            origin: [0.0, 0.0],
-            cell_size: 0.001,
-            fields: vec!["stress".into(), "fringe".into()],
-            components: vec![
-                FieldComponent {
-                    name: "sxx".into(),
-                    values: vals.clone(),
-                },
-                FieldComponent {
-                    name: "fringe".into(),
-                    values: vals.iter().map(|v| v.abs() / 50.0).collect(),
-                },
-            ],
-            cracks: vec![vec![[0.0, 0.005], [0.01, 0.005]]],
-        };
-        for f in ["sxx", "stress", "fringe"] {
-            let png = render_png(&snap, f).expect("renders");
-            assert_eq!(&png[1..4], b"PNG");
-        }
-        assert!(matches!(
-            render_png(&snap, "vx"),
-            Err(RenderError::UnknownField(_))
-        ));
-    }
-}
+mod tests;

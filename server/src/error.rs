@@ -1,5 +1,7 @@
-//! The one error type of the HTTP API and the JSON extractor that reports malformed bodies
-//! in the API's error format.
+//! The one error type of the HTTP API, the extractors that report malformed bodies and
+//! query strings in the API's error format ([`JsonBody`], [`ApiJson`], [`ApiQuery`]), and the
+//! classification of storage failures (a full disk or an I/O error is 507
+//! `insufficient_storage`, a busy store 503, never a bare 500).
 
 use axum::body::Bytes;
 use axum::extract::rejection::BytesRejection;
@@ -9,6 +11,8 @@ use axum::response::{IntoResponse, Response};
 use fracture_api::ValidationErrors;
 use fracture_api::jobs::{ErrorBody, ErrorDetail};
 use serde::de::DeserializeOwned;
+
+use crate::store::StoreError;
 
 /// Everything a request can fail with; each variant maps to one status code and error kind.
 #[derive(Debug, thiserror::Error)]
@@ -48,12 +52,28 @@ pub enum ApiError {
     /// 413: the body is larger than the configured limit.
     #[error("the request body is larger than the limit of {0} bytes")]
     PayloadTooLarge(usize),
+    /// 403: a cross-site request to a state-changing route, or a `Host` this server does
+    /// not answer to (DNS rebinding).
+    #[error("{0}")]
+    Forbidden(String),
+    /// 405: the route exists but not with this method.
+    #[error("{0}")]
+    MethodNotAllowed(String),
+    /// 415: the body is not sent as `application/json`.
+    #[error("{0}")]
+    UnsupportedMediaType(String),
     /// 503: the server is shutting down.
     #[error("the server is shutting down")]
     Unavailable,
+    /// 503: the store is busy (locked by another writer past the busy timeout); retry.
+    #[error("{0}")]
+    Busy(String),
+    /// 507: the data folder is full or failed (I/O error, read-only): nothing was stored.
+    #[error("{0}")]
+    Storage(String),
     /// 500 from the database; the body never shows the cause.
     #[error("database error: {0}")]
-    Database(#[from] sqlx::Error),
+    Database(sqlx::Error),
     /// 500 for anything else; the body never shows the cause.
     #[error("internal error: {0}")]
     Internal(String),
@@ -63,6 +83,15 @@ impl ApiError {
     /// An internal error from anything displayable (logged, never shown to clients).
     pub fn internal(e: impl std::fmt::Display) -> Self {
         ApiError::Internal(e.to_string())
+    }
+
+    /// A file-system error: a full disk, a quota, a read-only or failing file system is
+    /// [`ApiError::Storage`] (507); anything else internal.
+    pub fn io(e: &(dyn std::error::Error + 'static)) -> Self {
+        match storage_fault(e) {
+            Some(what) => ApiError::Storage(storage_message(what)),
+            None => ApiError::internal(e),
+        }
     }
 
     /// The status code of this error.
@@ -76,7 +105,11 @@ impl ApiError {
             ApiError::NotFound(_) => StatusCode::NOT_FOUND,
             ApiError::Conflict(_) => StatusCode::CONFLICT,
             ApiError::PayloadTooLarge(_) => StatusCode::PAYLOAD_TOO_LARGE,
-            ApiError::Unavailable => StatusCode::SERVICE_UNAVAILABLE,
+            ApiError::Forbidden(_) => StatusCode::FORBIDDEN,
+            ApiError::MethodNotAllowed(_) => StatusCode::METHOD_NOT_ALLOWED,
+            ApiError::UnsupportedMediaType(_) => StatusCode::UNSUPPORTED_MEDIA_TYPE,
+            ApiError::Unavailable | ApiError::Busy(_) => StatusCode::SERVICE_UNAVAILABLE,
+            ApiError::Storage(_) => StatusCode::INSUFFICIENT_STORAGE,
             ApiError::Database(_) | ApiError::Internal(_) => StatusCode::INTERNAL_SERVER_ERROR,
         }
     }
@@ -92,7 +125,11 @@ impl ApiError {
             ApiError::NotFound(_) => ("not_found", vec![]),
             ApiError::Conflict(_) => ("conflict", vec![]),
             ApiError::PayloadTooLarge(_) => ("payload_too_large", vec![]),
-            ApiError::Unavailable => ("unavailable", vec![]),
+            ApiError::Forbidden(_) => ("forbidden", vec![]),
+            ApiError::MethodNotAllowed(_) => ("method_not_allowed", vec![]),
+            ApiError::UnsupportedMediaType(_) => ("unsupported_media_type", vec![]),
+            ApiError::Unavailable | ApiError::Busy(_) => ("unavailable", vec![]),
+            ApiError::Storage(_) => ("insufficient_storage", vec![]),
             ApiError::Database(_) | ApiError::Internal(_) => ("internal", vec![]),
         };
         let message = match self {
@@ -115,6 +152,92 @@ impl ApiError {
             details,
         }
     }
+}
+
+impl From<StoreError> for ApiError {
+    fn from(e: StoreError) -> Self {
+        match e {
+            StoreError::Fenced => ApiError::Conflict(e.to_string()),
+            StoreError::Db(d) => d.into(),
+            other => ApiError::internal(other),
+        }
+    }
+}
+
+impl From<sqlx::Error> for ApiError {
+    fn from(e: sqlx::Error) -> Self {
+        match classify_db(&e) {
+            Some(DbFault::Storage(what)) => {
+                tracing::error!(error = %e, "store write failed: {what}");
+                ApiError::Storage(storage_message(what))
+            }
+            Some(DbFault::Busy) => {
+                tracing::warn!(error = %e, "store busy");
+                ApiError::Busy("the store is busy; retry in a moment".into())
+            }
+            None => ApiError::Database(e),
+        }
+    }
+}
+
+/// What a database error says about the store.
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum DbFault {
+    /// The disk is full, or the file system failed or is read-only (the `&str` says which).
+    Storage(&'static str),
+    /// Another writer held the lock past the busy timeout, or no connection was free.
+    Busy,
+}
+
+/// Classify a database error by SQLite's primary result code (`SQLITE_FULL` 13,
+/// `SQLITE_IOERR` 10, `SQLITE_READONLY` 8, `SQLITE_CANTOPEN` 14, `SQLITE_BUSY` 5,
+/// `SQLITE_LOCKED` 6) or the I/O error under it.
+pub fn classify_db(e: &sqlx::Error) -> Option<DbFault> {
+    match e {
+        sqlx::Error::Database(d) => {
+            let code = d.code()?.parse::<i64>().ok()? & 0xff;
+            match code {
+                13 => Some(DbFault::Storage("the disk is full")),
+                10 => Some(DbFault::Storage("an I/O error")),
+                8 => Some(DbFault::Storage("the data folder is read-only")),
+                14 => Some(DbFault::Storage("a database file cannot be opened")),
+                5 | 6 => Some(DbFault::Busy),
+                _ => None,
+            }
+        }
+        sqlx::Error::Io(io) => storage_fault(io).map(DbFault::Storage),
+        sqlx::Error::PoolTimedOut => Some(DbFault::Busy),
+        _ => None,
+    }
+}
+
+/// Whether an error (or one under it) is an I/O error of a full, failing or read-only file
+/// system (`ENOSPC`, `EDQUOT`, `EIO`, `EROFS`), and which.
+pub fn storage_fault(e: &(dyn std::error::Error + 'static)) -> Option<&'static str> {
+    let mut cur: Option<&(dyn std::error::Error + 'static)> = Some(e);
+    while let Some(err) = cur {
+        if let Some(io) = err.downcast_ref::<std::io::Error>() {
+            match io.raw_os_error() {
+                Some(28) | Some(122) => return Some("the disk is full"),
+                Some(5) => return Some("an I/O error"),
+                Some(30) => return Some("the data folder is read-only"),
+                _ => {}
+            }
+            if io.kind() == std::io::ErrorKind::StorageFull {
+                return Some("the disk is full");
+            }
+        }
+        cur = err.source();
+    }
+    None
+}
+
+/// The message of a 507.
+fn storage_message(what: &str) -> String {
+    format!(
+        "the server could not store this request: {what} in its data folder. Nothing was \
+         stored; retry once space is freed (no restart needed)"
+    )
 }
 
 impl From<ValidationErrors> for ApiError {
@@ -178,15 +301,85 @@ impl<S: Send + Sync> FromRequest<S> for RawBody {
     }
 }
 
-/// A JSON body: malformed JSON gets a 400 in the API's error format, an oversized body 413.
+/// Whether the request says its body is JSON (`application/json`, with or without
+/// parameters such as `charset`, or any `application/*+json`).
+pub fn is_json(headers: &axum::http::HeaderMap) -> bool {
+    let Some(ct) = headers
+        .get(axum::http::header::CONTENT_TYPE)
+        .and_then(|v| v.to_str().ok())
+    else {
+        return false;
+    };
+    let mime = ct
+        .split(';')
+        .next()
+        .unwrap_or("")
+        .trim()
+        .to_ascii_lowercase();
+    mime == "application/json" || (mime.starts_with("application/") && mime.ends_with("+json"))
+}
+
+/// The raw bytes of a body sent as `application/json` (415 otherwise: a browser sends a
+/// cross-site "simple" request only as `text/plain`, form data or multipart, so refusing
+/// them keeps other pages from submitting work), with the limits of [`RawBody`].
+pub struct JsonBody(pub Bytes);
+
+impl<S: Send + Sync> FromRequest<S> for JsonBody {
+    type Rejection = ApiError;
+    async fn from_request(req: Request, state: &S) -> Result<Self, Self::Rejection> {
+        if !is_json(req.headers()) {
+            let given = req
+                .headers()
+                .get(axum::http::header::CONTENT_TYPE)
+                .and_then(|v| v.to_str().ok())
+                .map(|v| format!("`{v}`"))
+                .unwrap_or_else(|| "none".into());
+            return Err(ApiError::UnsupportedMediaType(format!(
+                "the body must be sent with `Content-Type: application/json` (given: {given})"
+            )));
+        }
+        let RawBody(bytes) = RawBody::from_request(req, state).await?;
+        Ok(JsonBody(bytes))
+    }
+}
+
+/// A JSON body: a body not sent as `application/json` gets 415, malformed JSON a 400 in the
+/// API's error format, an oversized body 413.
 pub struct ApiJson<T>(pub T);
 
 impl<T: DeserializeOwned, S: Send + Sync> FromRequest<S> for ApiJson<T> {
     type Rejection = ApiError;
     async fn from_request(req: Request, state: &S) -> Result<Self, Self::Rejection> {
-        let RawBody(bytes) = RawBody::from_request(req, state).await?;
+        let JsonBody(bytes) = JsonBody::from_request(req, state).await?;
         parse_json(&bytes).map(ApiJson)
     }
+}
+
+/// A query string: a malformed value or an unknown parameter (the query types deny unknown
+/// fields) is a 400 in the API's error format instead of axum's plain-text rejection.
+pub struct ApiQuery<T>(pub T);
+
+impl<T: DeserializeOwned, S: Send + Sync> axum::extract::FromRequestParts<S> for ApiQuery<T> {
+    type Rejection = ApiError;
+    async fn from_request_parts(
+        parts: &mut axum::http::request::Parts,
+        _: &S,
+    ) -> Result<Self, Self::Rejection> {
+        let q = parts.uri.query().unwrap_or("");
+        query_from_str(q)
+            .map(ApiQuery)
+            .map_err(|e| ApiError::BadRequest(format!("bad query string: {e}")))
+    }
+}
+
+/// Decode a query string the way axum's `Query` does.
+fn query_from_str<T: DeserializeOwned>(q: &str) -> Result<T, String> {
+    let uri: axum::http::Uri = format!("/?{q}")
+        .parse()
+        .map_err(|e: axum::http::uri::InvalidUri| e.to_string())?;
+    axum::extract::Query::<T>::try_from_uri(&uri)
+        .map(|axum::extract::Query(v)| v)
+        .map_err(|e| e.body_text())
 }
 
 /// Parse JSON text; errors become 400 with serde's message (line and column).

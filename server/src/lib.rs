@@ -1,7 +1,7 @@
 //! The mpm-fracture service: HTTP API, SQLite store, durable job queue, SSE streams,
 //! results files and the dashboard.
 //!
-//! * [`app`] builds the axum [`Router`](axum::Router) from an [`AppState`]; it is what the
+//! * [`app`] ([`http`]) builds the axum [`Router`](axum::Router) from an [`AppState`]; it is what the
 //!   binary serves and what the unit tests drive with `tower::ServiceExt::oneshot`.
 //! * [`store`] owns the SQLite database (jobs, the queue with leases and fencing tokens,
 //!   history rows and snapshots); [`files`] owns each job's MCAP file. The server is the
@@ -17,12 +17,14 @@ pub mod config;
 pub mod error;
 pub mod events;
 pub mod files;
-pub mod routes;
+pub mod http;
 pub mod server;
 pub mod service;
 pub mod store;
 
 pub use config::Config;
 pub use error::ApiError;
-pub use routes::app;
+/// The router's old path (`fracture_server::routes::app`), kept for callers.
+pub use http as routes;
+pub use http::app;
 pub use server::AppState;

@@ -4,6 +4,7 @@
 use std::sync::Arc;
 use std::time::Duration;
 
+use fracture_api::jobs::JobStatus;
 use tokio::sync::{Notify, watch};
 
 use crate::config::Config;
@@ -53,7 +54,7 @@ impl AppState {
     /// Announce a job's new state on its stream (and wake claimers if it is queued).
     pub fn announce(&self, job: &JobRow) {
         self.hub.send(&job.id, JobEvent::Status(job.status_event()));
-        if job.status == "queued" {
+        if job.status == JobStatus::Queued {
             self.queue_changed.notify_waiters();
         }
     }
@@ -69,8 +70,8 @@ impl AppState {
             match self.store.reap(self.cfg.max_attempts).await {
                 Ok(rows) => {
                     for j in rows {
-                        tracing::warn!(job = %j.id, status = %j.status, "lease expired");
-                        if j.status() != fracture_api::jobs::JobStatus::Queued {
+                        tracing::warn!(job = %j.id, status = j.status.as_str(), "lease expired");
+                        if j.status != JobStatus::Queued {
                             let files = self.files.clone();
                             let id = j.id.clone();
                             let _ = tokio::task::spawn_blocking(move || files.finish(&id)).await;

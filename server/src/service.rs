@@ -1,6 +1,8 @@
-//! `fracture serve`: the service process. Opens the store, re-queues jobs a previous server
-//! left running, serves the API and dashboard, keeps the local worker processes alive
-//! (`fracture worker` children of this executable), and shuts down gracefully.
+//! `fracture serve`: the service process. Takes the data folder's lock (one server per
+//! folder), opens the store, re-queues jobs a previous server left running, serves the API
+//! and dashboard, keeps the local worker processes alive (`fracture worker` children of
+//! this executable; a child's exit cause and the last lines of its stderr go into the
+//! message of the job it held), and shuts down gracefully.
 
 use std::net::SocketAddr;
 use std::path::{Path, PathBuf};
@@ -10,7 +12,6 @@ use std::time::Duration;
 
 use clap::Parser;
 use tokio::process::{Child, Command};
-use tokio::sync::watch;
 
 use crate::config::{Config, Limits};
 use crate::files::JobFiles;
@@ -39,8 +40,8 @@ pub struct ServeArgs {
     /// Token of the worker routes (default: generated at start, given to local workers).
     #[arg(long, env = "FRACTURE_WORKER_TOKEN", hide_env_values = true)]
     pub worker_token: Option<String>,
-    /// Lease of a claimed job without heartbeats (s).
-    #[arg(long, env = "FRACTURE_LEASE_SECONDS", default_value_t = 30.0)]
+    /// Lease of a claimed job without heartbeats (s, 0.5 to 3600).
+    #[arg(long, env = "FRACTURE_LEASE_SECONDS", default_value_t = 30.0, value_parser = parse_lease)]
     pub lease_seconds: f64,
     /// Claims of a job before a lost lease fails it.
     #[arg(long, env = "FRACTURE_MAX_ATTEMPTS", default_value_t = 3)]
@@ -60,6 +61,53 @@ pub struct ServeArgs {
     /// Most jobs (parameter combinations) one sweep may create.
     #[arg(long, env = "FRACTURE_MAX_SWEEP_JOBS", default_value_t = Limits::default().max_sweep_jobs)]
     pub max_sweep_jobs: u64,
+    /// Most memory one run may need, by the estimate of `fracture_api::cost` (bytes;
+    /// default: half of this machine's memory). Local workers are capped at the estimate
+    /// of their job plus a margin.
+    #[arg(long, env = "FRACTURE_MAX_MEMORY_BYTES")]
+    pub max_memory_bytes: Option<u64>,
+    /// Most work one run may take: particles × time steps.
+    #[arg(long, env = "FRACTURE_MAX_PARTICLE_STEPS", default_value_t = Limits::default().max_particle_steps)]
+    pub max_particle_steps: u64,
+    /// A host name the server answers to besides loopback names and IP literals
+    /// (repeatable, or comma-separated in the variable; `*`: any). Guards against DNS
+    /// rebinding.
+    #[arg(
+        long = "allowed-host",
+        env = "FRACTURE_ALLOWED_HOSTS",
+        value_delimiter = ','
+    )]
+    pub allowed_hosts: Vec<String>,
+    /// Listen on a non-loopback address without `--token`: anyone who can reach the port
+    /// may submit, cancel and delete jobs.
+    #[arg(long, env = "FRACTURE_INSECURE_NO_TOKEN")]
+    pub insecure_no_token: bool,
+}
+
+/// `--lease-seconds`: a finite number of seconds in 0.5..=3600.
+fn parse_lease(s: &str) -> Result<f64, String> {
+    let v: f64 = s
+        .trim()
+        .parse()
+        .map_err(|_| format!("`{s}` is not a number of seconds"))?;
+    if v.is_finite() && (0.5..=3600.0).contains(&v) {
+        Ok(v)
+    } else {
+        Err(format!("{v} is not in 0.5..=3600 seconds"))
+    }
+}
+
+/// Half of this machine's memory (`/proc/meminfo`), or 8 GiB where it cannot be read.
+pub fn default_max_memory() -> u64 {
+    std::fs::read_to_string("/proc/meminfo")
+        .ok()
+        .and_then(|t| {
+            t.lines()
+                .find_map(|l| l.strip_prefix("MemTotal:"))
+                .and_then(|v| v.trim().trim_end_matches("kB").trim().parse::<u64>().ok())
+        })
+        .map(|kb| kb.saturating_mul(1024) / 2)
+        .unwrap_or(crate::config::DEFAULT_MAX_MEMORY_BYTES)
 }
 
 #[derive(Parser, Debug)]
@@ -88,8 +136,12 @@ impl ServeArgs {
 pub fn init_tracing() {
     let filter = tracing_subscriber::EnvFilter::try_from_default_env()
         .unwrap_or_else(|_| tracing_subscriber::EnvFilter::new("info,tower_http=warn,sqlx=warn"));
+    // A log that cannot be written (stderr redirected to a full disk) is dropped: with
+    // `log_internal_errors` on, tracing-subscriber reports it with `eprintln!`, which
+    // panics when stderr fails — every request that logged anything died with it.
     let _ = tracing_subscriber::fmt()
         .with_env_filter(filter)
+        .log_internal_errors(false)
         .with_writer(std::io::stderr)
         .with_ansi(std::io::IsTerminal::is_terminal(&std::io::stderr()))
         .try_init();
@@ -127,10 +179,91 @@ fn write_atomically(path: &Path, text: &str) -> std::io::Result<()> {
     std::fs::rename(tmp, path)
 }
 
+/// Refuse to listen beyond this machine without an API token (unless the user says so).
+fn check_public_bind(a: &ServeArgs) -> anyhow::Result<()> {
+    use std::net::ToSocketAddrs;
+    let has_token = a.token.as_deref().is_some_and(|t| !t.is_empty());
+    if has_token || a.insecure_no_token {
+        return Ok(());
+    }
+    let addrs: Vec<SocketAddr> = a
+        .bind
+        .to_socket_addrs()
+        .map_err(|e| anyhow::anyhow!("cannot resolve --bind {}: {e}", a.bind))?
+        .collect();
+    if let Some(public) = addrs.iter().find(|x| !x.ip().is_loopback()) {
+        anyhow::bail!(
+            "refusing to listen on {public} (reachable from other machines) without an API \
+             token: anyone who reaches the port could submit, cancel and delete jobs. Pass \
+             --token (or FRACTURE_TOKEN), or --insecure-no-token if the network is trusted"
+        );
+    }
+    Ok(())
+}
+
+/// The exclusive lock of a data folder: `<data>/server.lock`, held (flock) for the life of
+/// the process and released by the OS when it dies; its text names the holder.
+pub struct DataLock {
+    file: std::fs::File,
+    path: PathBuf,
+}
+
+impl DataLock {
+    /// Take the lock of `data`, or fail at once naming the folder and the holder.
+    pub fn acquire(data: &Path) -> anyhow::Result<DataLock> {
+        let path = data.join("server.lock");
+        let file = std::fs::OpenOptions::new()
+            .read(true)
+            .write(true)
+            .create(true)
+            .truncate(false)
+            .open(&path)
+            .map_err(|e| anyhow::anyhow!("cannot open {}: {e}", path.display()))?;
+        match file.try_lock() {
+            Ok(()) => {}
+            Err(std::fs::TryLockError::WouldBlock) => {
+                let holder = std::fs::read_to_string(&path).unwrap_or_default();
+                let holder = holder.trim();
+                anyhow::bail!(
+                    "the data folder {} is in use by another fracture server ({}); stop it \
+                     first or choose another --data",
+                    data.display(),
+                    if holder.is_empty() {
+                        "starting up".to_string()
+                    } else {
+                        holder.replace('\n', ", ")
+                    }
+                );
+            }
+            Err(std::fs::TryLockError::Error(e)) => {
+                anyhow::bail!("cannot lock {}: {e}", path.display())
+            }
+        }
+        let lock = DataLock { file, path };
+        lock.describe(&format!("pid {}", std::process::id()));
+        Ok(lock)
+    }
+
+    /// Record who holds the lock (what a second server's error shows).
+    pub fn describe(&self, text: &str) {
+        use std::io::{Seek, Write};
+        let mut f = &self.file;
+        let ok = f.set_len(0).is_ok()
+            && f.seek(std::io::SeekFrom::Start(0)).is_ok()
+            && f.write_all(text.as_bytes()).is_ok();
+        if !ok {
+            tracing::warn!(path = %self.path.display(), "cannot write the lock file's text");
+        }
+    }
+}
+
 async fn serve_async(a: ServeArgs) -> anyhow::Result<()> {
     use anyhow::Context;
+    check_public_bind(&a)?;
     std::fs::create_dir_all(&a.data)
         .with_context(|| format!("cannot create the data folder {}", a.data.display()))?;
+    // One server per data folder: nothing is touched before the lock is held.
+    let lock = DataLock::acquire(&a.data)?;
     let store = Store::open(&a.data.join("fracture.db"))
         .await
         .context("cannot open the store")?;
@@ -142,12 +275,34 @@ async fn serve_async(a: ServeArgs) -> anyhow::Result<()> {
     if !recovered.is_empty() {
         tracing::info!(jobs = recovered.len(), "re-queued jobs left running");
     }
+    let files = JobFiles::new(&a.data);
+    // Folders of jobs whose deletion did not get to remove them.
+    match store.job_ids().await {
+        Ok(known) => {
+            let f = files.clone();
+            let n = tokio::task::spawn_blocking(move || f.remove_orphans(&known))
+                .await
+                .unwrap_or(0);
+            if n > 0 {
+                tracing::info!(folders = n, "removed results folders of deleted jobs");
+            }
+        }
+        Err(e) => tracing::warn!(error = %e, "cannot list jobs to remove orphaned folders"),
+    }
     let cores = std::thread::available_parallelism()
         .map(|n| n.get())
         .unwrap_or(2);
     let workers = a.workers.unwrap_or((cores / 2).max(1));
     let worker_threads = a.worker_threads.unwrap_or((cores / workers.max(1)).max(1));
     let lease = Duration::from_secs_f64(a.lease_seconds.clamp(0.5, 3600.0));
+    let mut allowed_hosts = a.allowed_hosts.clone();
+    if let Ok(h) = std::fs::read_to_string("/etc/hostname") {
+        let h = h.trim();
+        if !h.is_empty() {
+            allowed_hosts.push(h.to_string());
+        }
+    }
+    let max_memory = a.max_memory_bytes.unwrap_or_else(default_max_memory);
     let cfg = Config {
         api_token: a.token.clone().filter(|t| !t.is_empty()),
         worker_token: a
@@ -164,16 +319,22 @@ async fn serve_async(a: ServeArgs) -> anyhow::Result<()> {
             max_snapshot_volume: a.max_snapshot_volume,
             max_body_bytes: a.max_body_bytes,
             max_sweep_jobs: a.max_sweep_jobs,
+            max_memory_bytes: max_memory,
+            max_particle_steps: a.max_particle_steps,
             ..Limits::default()
         },
         local_workers: workers,
+        allowed_hosts,
     };
-    let files = JobFiles::new(&a.data);
     let (state, shutdown_tx) = AppState::new(store.clone(), cfg, files.clone());
     let listener = tokio::net::TcpListener::bind(&a.bind)
         .await
         .with_context(|| format!("cannot listen on {}", a.bind))?;
     let addr = listener.local_addr()?;
+    lock.describe(&format!(
+        "pid {}, listening on http://{addr}",
+        std::process::id()
+    ));
     write_atomically(&a.data.join("server.addr"), &addr.to_string())?;
     tracing::info!(%addr, workers, data = %a.data.display(), "listening on http://{addr}");
 
@@ -183,12 +344,14 @@ async fn serve_async(a: ServeArgs) -> anyhow::Result<()> {
             .run_reaper((lease / 4).clamp(Duration::from_millis(200), Duration::from_secs(2))),
     );
     let supervisor = tokio::spawn(supervise_workers(
-        workers,
-        worker_threads,
-        local_url(addr),
-        state.cfg.worker_token.clone(),
-        a.data.join("workers"),
-        state.shutdown.clone(),
+        state.clone(),
+        Workers {
+            n: workers,
+            threads: worker_threads,
+            url: local_url(addr),
+            dir: a.data.join("workers"),
+            max_memory,
+        },
     ));
 
     let app = crate::app(state.clone());
@@ -205,9 +368,18 @@ async fn serve_async(a: ServeArgs) -> anyhow::Result<()> {
     let _ = shutdown_tx.send(true);
     // Stop the local workers first so they write nothing more, then give their jobs back.
     let _ = tokio::time::timeout(Duration::from_secs(10), supervisor).await;
-    let released = store
+    // Every step is best effort: a store that cannot be written (a full disk) must not keep
+    // the process from stopping (the next start re-queues what is left running).
+    let released = match store
         .release_running("re-queued: the server shut down while it ran")
-        .await?;
+        .await
+    {
+        Ok(r) => r,
+        Err(e) => {
+            tracing::error!(error = %e, "cannot re-queue the running jobs; the next start will");
+            Vec::new()
+        }
+    };
     for j in &released {
         state.announce(j);
     }
@@ -218,8 +390,14 @@ async fn serve_async(a: ServeArgs) -> anyhow::Result<()> {
         Ok(_) => {}
         Err(_) => tracing::warn!("connections still open after 5 s; closing"),
     }
-    let _ = reaper.await;
-    store.close().await;
+    let _ = tokio::time::timeout(Duration::from_secs(5), reaper).await;
+    if tokio::time::timeout(Duration::from_secs(5), store.close())
+        .await
+        .is_err()
+    {
+        tracing::warn!("the store did not close within 5 s");
+    }
+    drop(lock);
     tracing::info!(released = released.len(), "stopped");
     Ok(())
 }
@@ -259,42 +437,123 @@ async fn shutdown_signal() {
     }
 }
 
-fn spawn_worker(
-    exe: &Path,
-    url: &str,
-    token: &str,
+/// The local worker processes.
+struct Workers {
+    n: usize,
     threads: usize,
-    slot: usize,
-    pid_dir: &Path,
-) -> std::io::Result<Child> {
+    url: String,
+    dir: PathBuf,
+    max_memory: u64,
+}
+
+/// Lines of a worker's stderr kept for the message of the job it held when it died.
+const STDERR_TAIL: usize = 8;
+
+fn spawn_worker(exe: &Path, w: &Workers, token: &str, slot: usize) -> std::io::Result<Child> {
     let child = Command::new(exe)
         .arg("worker")
         .arg("--server")
-        .arg(url)
+        .arg(&w.url)
         .arg("--threads")
-        .arg(threads.to_string())
+        .arg(w.threads.to_string())
         .arg("--parent-pid")
         .arg(std::process::id().to_string())
+        .arg("--worker-name")
+        .arg(format!("local{slot}"))
+        .arg("--max-memory-bytes")
+        .arg(w.max_memory.to_string())
         .env("FRACTURE_WORKER_TOKEN", token)
         .env_remove("FRACTURE_BIND")
+        .stderr(std::process::Stdio::piped())
         .kill_on_drop(true)
         .spawn()?;
     if let Some(pid) = child.id() {
-        let _ = write_atomically(&pid_dir.join(format!("{slot}.pid")), &pid.to_string());
+        let _ = write_atomically(&w.dir.join(format!("{slot}.pid")), &pid.to_string());
     }
     Ok(child)
 }
 
-/// Keep `n` local worker processes alive until shutdown, then stop them.
-async fn supervise_workers(
-    n: usize,
-    threads: usize,
-    url: String,
-    token: String,
-    pid_dir: PathBuf,
-    mut shutdown: watch::Receiver<bool>,
-) {
-    if n == 0 {
+/// Copy a worker's stderr to ours and to `<data>/workers/<slot>.log`, keeping its last
+/// lines.
+fn tee_stderr(
+    child: &mut Child,
+    log: PathBuf,
+) -> Option<tokio::task::JoinHandle<std::collections::VecDeque<String>>> {
+    use tokio::io::{AsyncBufReadExt, AsyncWriteExt};
+    let err = child.stderr.take()?;
+    Some(tokio::spawn(async move {
+        let mut tail = std::collections::VecDeque::new();
+        let mut lines = tokio::io::BufReader::new(err).lines();
+        let mut file = tokio::fs::OpenOptions::new()
+            .create(true)
+            .append(true)
+            .open(&log)
+            .await
+            .ok();
+        let mut out = tokio::io::stderr();
+        while let Ok(Some(line)) = lines.next_line().await {
+            let _ = out.write_all(format!("{line}\n").as_bytes()).await;
+            if let Some(f) = file.as_mut()
+                && f.write_all(format!("{line}\n").as_bytes()).await.is_err()
+            {
+                file = None; // a full disk: keep the tail in memory only
+            }
+            if tail.len() == STDERR_TAIL {
+                tail.pop_front();
+            }
+            tail.push_back(line);
+        }
+        tail
+    }))
+}
+
+/// Why a worker process ended, for people: the signal or exit status, what it usually
+/// means, and the last lines of its stderr.
+pub fn exit_cause(status: &std::process::ExitStatus, tail: &[String]) -> String {
+    #[cfg(unix)]
+    let how = {
+        use std::os::unix::process::ExitStatusExt;
+        match (status.signal(), status.code()) {
+            (Some(9), _) => "killed by signal 9 (SIGKILL: e.g. the out-of-memory killer)".into(),
+            (Some(6), _) => "aborted (signal 6, SIGABRT: e.g. a failed memory allocation)".into(),
+            (Some(7), _) => {
+                "killed by signal 7 (SIGBUS: e.g. a full or vanished file system)".into()
+            }
+            (Some(11), _) => "killed by signal 11 (SIGSEGV)".into(),
+            (Some(15), _) => "stopped by signal 15 (SIGTERM)".into(),
+            (Some(sig), _) => format!("killed by signal {sig}"),
+            (None, Some(code)) => format!("exited with status {code}"),
+            (None, None) => "ended".into(),
+        }
+    };
+    #[cfg(not(unix))]
+    let how = format!("exited ({status})");
+    // The log lines worth showing: strip the tracing prefix's colour codes, keep them short.
+    let lines: Vec<String> = tail
+        .iter()
+        .map(|l| {
+            let l: String = l.chars().filter(|c| *c != '\u{1b}').collect();
+            let l = l.trim();
+            if l.chars().count() > 300 {
+                format!("{}…", l.chars().take(300).collect::<String>())
+            } else {
+                l.to_string()
+            }
+        })
+        .filter(|l| !l.is_empty())
+        .collect();
+    if lines.is_empty() {
+        how
+    } else {
+        format!("{how}; its last output: {}", lines.join(" | "))
+    }
+}
+
+/// Keep the local worker processes alive until shutdown, then stop them. When one exits
+/// while it holds a job, the job is released at once with the exit cause in its message
+/// (re-queued, or failed past the attempt limit or when the cause is memory).
+async fn supervise_workers(st: AppState, w: Workers) {
+    if w.n == 0 {
         return;
     }
     let exe = match std::env::current_exe() {
@@ -304,19 +563,22 @@ async fn supervise_workers(
             return;
         }
     };
-    let _ = std::fs::create_dir_all(&pid_dir);
+    let _ = std::fs::create_dir_all(&w.dir);
     let exe = Arc::new(exe);
+    let w = Arc::new(w);
+    let mut shutdown = st.shutdown.clone();
     let mut slots = Vec::new();
-    for slot in 0..n {
-        let (exe, url, token, pid_dir) = (exe.clone(), url.clone(), token.clone(), pid_dir.clone());
-        let mut sd = shutdown.clone();
+    for slot in 0..w.n {
+        let (exe, w, st) = (exe.clone(), w.clone(), st.clone());
+        let mut sd = st.shutdown.clone();
         slots.push(tokio::spawn(async move {
             let mut backoff = Duration::from_millis(200);
             loop {
                 if *sd.borrow() {
                     return;
                 }
-                let mut child = match spawn_worker(&exe, &url, &token, threads, slot, &pid_dir) {
+                let token = st.cfg.worker_token.clone();
+                let mut child = match spawn_worker(&exe, &w, &token, slot) {
                     Ok(c) => c,
                     Err(e) => {
                         tracing::error!(error = %e, slot, "cannot start a worker");
@@ -324,10 +586,25 @@ async fn supervise_workers(
                         continue;
                     }
                 };
+                // Its jobs carry the worker id `local<slot>-<pid>-<random>`.
+                let id_prefix = format!("local{slot}-{}-", child.id().unwrap_or(0));
+                let tee = tee_stderr(&mut child, w.dir.join(format!("{slot}.log")));
                 let started = tokio::time::Instant::now();
                 tokio::select! {
-                    st = child.wait() => {
-                        tracing::warn!(slot, status = ?st, "worker exited; restarting");
+                    st_exit = child.wait() => {
+                        let tail: Vec<String> = match tee {
+                            Some(t) => match tokio::time::timeout(Duration::from_secs(2), t).await {
+                                Ok(Ok(t)) => t.into_iter().collect(),
+                                _ => Vec::new(),
+                            },
+                            None => Vec::new(),
+                        };
+                        let cause = match &st_exit {
+                            Ok(s) => exit_cause(s, &tail),
+                            Err(e) => format!("lost ({e})"),
+                        };
+                        tracing::warn!(slot, cause = %cause, "worker exited; restarting");
+                        release_jobs_of(&st, &id_prefix, &cause).await;
                         if started.elapsed() > Duration::from_secs(10) {
                             backoff = Duration::from_millis(200);
                         }
@@ -346,5 +623,35 @@ async fn supervise_workers(
     let _ = shutdown.wait_for(|s| *s).await;
     for s in slots {
         let _ = s.await;
+    }
+}
+
+/// Release the jobs a dead worker (ids starting with `id_prefix`) held, with its exit cause
+/// in their message.
+async fn release_jobs_of(st: &AppState, id_prefix: &str, cause: &str) {
+    let memory = [
+        "memory allocation of",
+        "out of memory",
+        "Cannot allocate memory",
+    ]
+    .iter()
+    .any(|m| cause.contains(m));
+    match st
+        .store
+        .release_worker(id_prefix, cause, st.cfg.max_attempts, memory)
+        .await
+    {
+        Ok(rows) => {
+            for j in rows {
+                tracing::warn!(job = %j.id, status = j.status.as_str(), "the job's worker died");
+                if j.status.is_terminal() {
+                    let files = st.files.clone();
+                    let id = j.id.clone();
+                    let _ = tokio::task::spawn_blocking(move || files.finish(&id)).await;
+                }
+                st.announce(&j);
+            }
+        }
+        Err(e) => tracing::error!(error = %e, "cannot release the jobs of a dead worker"),
     }
 }

@@ -5,6 +5,7 @@
 
 use axum::body::Body;
 use axum::http::{Request, StatusCode};
+use fracture_api::jobs::JobStatus;
 use fracture_server::config::{Config, Limits};
 use fracture_server::files::JobFiles;
 use fracture_server::store::Store;
@@ -307,12 +308,12 @@ async fn priorities_order_claims_and_lost_leases_hit_the_attempt_limit() {
         assert_eq!(reaped.len(), 1);
         let j = &reaped[0];
         if attempt < max {
-            assert_eq!(j.status, "queued");
+            assert_eq!(j.status, JobStatus::Queued);
             let again = st.store.claim("w", Duration::ZERO).await.unwrap().unwrap();
             assert_eq!(again.job.id, j.id);
             assert_eq!(again.job.fence, attempt as i64 + 1);
         } else {
-            assert_eq!(j.status, "failed");
+            assert_eq!(j.status, JobStatus::Failed);
             assert!(
                 j.message.as_deref().unwrap().contains("lost"),
                 "{:?}",
@@ -327,4 +328,139 @@ async fn priorities_order_claims_and_lost_leases_hit_the_attempt_limit() {
         .unwrap()
         .unwrap();
     assert_eq!(next.job.id, a["id"].as_str().unwrap());
+}
+
+#[tokio::test]
+async fn an_enormous_scene_is_refused_before_its_lattice_is_walked() {
+    // 1 µm cells over a 10 mm × 10 mm plate at 8 × 8 particles per cell: 1.0e8 grid nodes
+    // (within what validation accepts) and 6.4e9 particles for it to place, minutes of
+    // lattice walk; the estimate from the region refuses it at once.
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let mut sc = scene();
+    sc["grid"] = json!({ "cell_size": 1.0e-6, "min": [0.0, 0.0], "max": [0.0102, 0.0102] });
+    sc["bodies"][0]["region"] =
+        json!({ "rectangle": { "min": [0.0001, 0.0001], "max": [0.0101, 0.0101] } });
+    sc["bodies"][0]["particles_per_cell"] = json!(8);
+    for uri in ["/api/v1/scenes/validate", "/api/v1/jobs"] {
+        let t0 = std::time::Instant::now();
+        let (s, v) = call(&st, post(uri, sc.to_string(), None)).await;
+        let took = t0.elapsed();
+        assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{uri}: {v}");
+        assert_error_body(&v, "limit_exceeded");
+        assert!(
+            v["message"].as_str().unwrap().contains("max_particles"),
+            "{v}"
+        );
+        assert_eq!(v["details"][0]["path"], "bodies", "{v}");
+        assert!(
+            took < std::time::Duration::from_secs(1),
+            "{uri} took {took:?}"
+        );
+    }
+    // The same through a sweep.
+    let body = json!({"scene": sc, "parameters": {"time.cfl": [0.2, 0.3]}});
+    let t0 = std::time::Instant::now();
+    let (s, v) = call(&st, post("/api/v1/sweeps", body.to_string(), None)).await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
+    assert!(
+        v["message"].as_str().unwrap().contains("max_particles"),
+        "{v}"
+    );
+    assert!(t0.elapsed() < std::time::Duration::from_secs(1));
+    assert_eq!(st.store.count_all().await.unwrap(), 0);
+
+    // A body whose bounding box is mostly empty (a thin slanted polygon) is refused by the
+    // work bound: validation would examine every site of the box.
+    let mut sc = scene();
+    sc["grid"] = json!({ "cell_size": 1.0e-6, "min": [0.0, 0.0], "max": [0.0102, 0.0102] });
+    sc["bodies"][0]["region"] = json!({ "polygon": { "points":
+        [[0.0001, 0.0001], [0.0101, 0.0101], [0.0101, 0.010101]] } });
+    let t0 = std::time::Instant::now();
+    let (s, v) = call(&st, post("/api/v1/scenes/validate", sc.to_string(), None)).await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
+    assert!(
+        v["details"][0]["message"]
+            .as_str()
+            .unwrap()
+            .contains("candidate"),
+        "{v}"
+    );
+    assert!(t0.elapsed() < std::time::Duration::from_secs(1));
+}
+
+#[tokio::test]
+async fn worker_routes_check_the_token_before_the_body() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    for uri in [
+        "/api/v1/worker/claim",
+        "/api/v1/worker/jobs/x/heartbeat",
+        "/api/v1/worker/jobs/x/energy",
+        "/api/v1/worker/jobs/x/finish",
+    ] {
+        let (s, v) = call(&st, post(uri, "{not json", None)).await;
+        assert_eq!(s, StatusCode::UNAUTHORIZED, "{uri}: {v}");
+        assert_error_body(&v, "unauthorized");
+        let (s, v) = call(&st, post(uri, "{not json", Some("wt"))).await;
+        assert_eq!(s, StatusCode::BAD_REQUEST, "{uri}: {v}");
+    }
+}
+
+#[tokio::test]
+async fn openapi_names_the_api_types() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let (s, api) = call(&st, get("/api/v1/openapi.json")).await;
+    assert_eq!(s, StatusCode::OK);
+    let schemas = &api["components"]["schemas"];
+    for name in [
+        "JobInfo",
+        "JobStatus",
+        "ErrorBody",
+        "ErrorDetail",
+        "CrackTipRow",
+        "EnergyRow",
+        "SnapshotInfo",
+        "Summary",
+        "Progress",
+        "SweepInfo",
+        "Claim",
+        "Heartbeat",
+        "HealthInfo",
+        "ValidateResponse",
+    ] {
+        assert!(schemas[name].is_object(), "no schema {name}");
+    }
+    let created = &api["paths"]["/api/v1/jobs"]["post"]["responses"]["201"];
+    assert_eq!(
+        created["content"]["application/json"]["schema"]["$ref"], "#/components/schemas/JobInfo",
+        "{created}"
+    );
+}
+
+#[tokio::test]
+async fn a_corrupt_row_is_a_500_not_a_default() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let (_, job) = call(&st, post("/api/v1/jobs", scene().to_string(), None)).await;
+    let id = job["id"].as_str().unwrap().to_string();
+    // Another connection to the same file damages the row's labels.
+    let opts = sqlx::sqlite::SqliteConnectOptions::new().filename(dir.path().join("t.db"));
+    let pool = sqlx::SqlitePool::connect_with(opts).await.unwrap();
+    sqlx::query("UPDATE jobs SET labels = 'not json' WHERE id = ?")
+        .bind(&id)
+        .execute(&pool)
+        .await
+        .unwrap();
+    pool.close().await;
+    let (s, v) = call(&st, get(&format!("/api/v1/jobs/{id}"))).await;
+    assert_eq!(s, StatusCode::INTERNAL_SERVER_ERROR, "{v}");
+    assert_error_body(&v, "internal");
+    assert!(
+        !v["message"].as_str().unwrap().contains("labels"),
+        "no internals: {v}"
+    );
+    let err = st.store.get(&id).await.unwrap_err();
+    assert!(err.to_string().contains("`labels`"), "{err}");
 }

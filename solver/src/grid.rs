@@ -219,6 +219,30 @@ fn first3(col: &mut [Node]) -> &mut [Node; 3] {
         .expect("stencil column inside the strip's write range")
 }
 
+/// Grid storage that the strip traversal splits at storage indices: one grid, or two with
+/// the same layout split together (the fused step's current grid, read, and the next step's
+/// grid, written: `sim/transfer.rs`).
+pub trait SplitGrid: Send + Sized {
+    /// Split at storage index `at` (absolute).
+    fn split_grid(self, at: usize) -> (Self, Self);
+}
+
+impl SplitGrid for GridMut<'_> {
+    #[inline]
+    fn split_grid(self, at: usize) -> (Self, Self) {
+        self.split_at(at)
+    }
+}
+
+impl SplitGrid for (GridMut<'_>, GridMut<'_>) {
+    #[inline]
+    fn split_grid(self, at: usize) -> (Self, Self) {
+        let (a0, a1) = self.0.split_at(at);
+        let (b0, b1) = self.1.split_at(at);
+        ((a0, b0), (a1, b1))
+    }
+}
+
 /// Something combined across strips in a fixed order (deterministic reductions).
 pub trait Reduce: Default + Send {
     /// Combine the result of a left (earlier) range with a right (later) one.
@@ -229,32 +253,39 @@ impl Reduce for () {
     fn merge(self, _: Self) -> Self {}
 }
 
+impl<A: Reduce, B: Reduce> Reduce for (A, B) {
+    fn merge(self, r: Self) -> Self {
+        (self.0.merge(r.0), self.1.merge(r.1))
+    }
+}
+
 /// Run `f` on every strip of colour `colour` (0 even, 1 odd) in parallel, each with mutable
 /// views of its particles and of the grid columns it may write. `bounds[s]..bounds[s+1]` is the
 /// particle range of strip `s`. Results are merged in strip order.
-pub fn for_strips<R, F>(
+pub fn for_strips<R, G, F>(
     geom: &GridGeom,
     bounds: &[usize],
     colour: usize,
     parts: PartsMut<'_>,
-    grid: GridMut<'_>,
+    grid: G,
     f: &F,
 ) -> R
 where
     R: Reduce,
-    F: Fn(usize, PartsMut<'_>, GridMut<'_>) -> R + Sync,
+    G: SplitGrid,
+    F: Fn(usize, PartsMut<'_>, G) -> R + Sync,
 {
     let n = geom.strips.saturating_sub(colour).div_ceil(2);
     if n == 0 {
         return R::default();
     }
     // Drop the storage before this colour's first chunk.
-    let (_, grid) = grid.split_at(colour * STRIP * geom.ny);
+    let (_, grid) = grid.split_grid(colour * STRIP * geom.ny);
     recurse(geom, bounds, colour, 0, n, parts, 0, grid, f)
 }
 
 #[allow(clippy::too_many_arguments)]
-fn recurse<R, F>(
+fn recurse<R, G, F>(
     geom: &GridGeom,
     bounds: &[usize],
     colour: usize,
@@ -262,26 +293,27 @@ fn recurse<R, F>(
     k1: usize,
     parts: PartsMut<'_>,
     pbase: usize,
-    grid: GridMut<'_>,
+    grid: G,
     f: &F,
 ) -> R
 where
     R: Reduce,
-    F: Fn(usize, PartsMut<'_>, GridMut<'_>) -> R + Sync,
+    G: SplitGrid,
+    F: Fn(usize, PartsMut<'_>, G) -> R + Sync,
 {
     if k1 - k0 == 1 {
         let s = 2 * k0 + colour;
         let (_, rest) = parts.split_at(bounds[s] - pbase);
         let (mine, _) = rest.split_at(bounds[s + 1] - bounds[s]);
         let end = (colour * STRIP + 2 * (k0 + 1) * STRIP) * geom.ny;
-        let (chunk, _) = grid.split_at(end);
+        let (chunk, _) = grid.split_grid(end);
         return f(s, mine, chunk);
     }
     let mid = (k0 + k1) / 2;
     let pcut = bounds[2 * mid + colour] - pbase;
     let gcut = (colour * STRIP + 2 * mid * STRIP) * geom.ny;
     let (pl, pr) = parts.split_at(pcut);
-    let (gl, gr) = grid.split_at(gcut);
+    let (gl, gr) = grid.split_grid(gcut);
     let (a, b) = rayon::join(
         || recurse(geom, bounds, colour, k0, mid, pl, pbase, gl, f),
         || recurse(geom, bounds, colour, mid, k1, pr, pbase + pcut, gr, f),

@@ -4,8 +4,8 @@
 //! [`Simulation::step`], and observed through read-only views ([`Simulation::energy`],
 //! [`Simulation::crack_tips`], [`Simulation::snapshot`], [`Simulation::particles`]).
 //! The method is written out in `../shared/design/algorithm.md`; modules follow its
-//! sections: [`shape`] (§1), [`grid`] and [`particles`] (data), [`step`] (§2), [`material`],
-//! [`crack`] (§3–§7).
+//! sections: [`shape`] (§1), [`grid`] and [`particles`] (data), [`sim`] (§2), [`material`],
+//! [`crack`] (§3–§7), [`tip_mechanics`] (§6–§7: A(v), Williams fields, kink criteria).
 //!
 //! The solver does no IO and never logs. Parallel loops use rayon with a deterministic
 //! strip-coloured scatter, so results are bitwise identical for any thread count.
@@ -19,6 +19,7 @@ pub mod material;
 pub mod particles;
 pub mod shape;
 pub mod sim;
+pub mod tip_mechanics;
 
 pub use sim::{
     BuildError, Parallelism, Simulation, SolverConfig, StepError, StepStats, WorkCounters,

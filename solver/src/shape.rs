@@ -106,7 +106,7 @@ fn gimp_1d(cell: f64, icell: i32, xi: f64, l: f64, q: f64) -> Weights1 {
     // (l ≤ ½ means never both). The stencil starts at cell−1 in the first case and at cell
     // otherwise, so a particle that reaches only two nodes (l ≤ f ≤ 1 − l) has them first and
     // its empty node last: the hot loops skip the last column and row when their weight is 0
-    // (`empty_column`, `last_row_empty` in sim.rs). With u the offset from the middle node (|u| < 1),
+    // (`Field0` in `sim/stencil.rs`). With u the offset from the middle node (|u| < 1),
     // the outer weights are the GIMP branches written out for that range, and the middle
     // weight follows from Σ S = 1 (equal to the branch formula: see
     // `fast_weights_match_reference`).

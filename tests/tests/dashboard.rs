@@ -1,4 +1,5 @@
-//! End-to-end test of the web dashboard in a real headless browser (issue 5).
+//! End-to-end test of the web dashboard in a real headless browser (issue 5). (One browser
+//! session walks every view in order, so the views share its setup: over 700 lines.)
 //!
 //! A real `fracture serve` (temporary data directory, one local worker process) and Debian's
 //! chromium driven through chromedriver with fantoccini: open the runs list, submit a small

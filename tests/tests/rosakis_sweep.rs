@@ -4,7 +4,7 @@
 //! worker processes — and the physics the sweep must show.
 //!
 //! The scene: two Homalite-100 halves (E = 5.2 GPa, ν = 0.34, ρ = 1230 kg/m³, plane
-//! strain) bonded along y = 27 mm, a 15 mm notch along the bond, the impact as a
+//! strain) bonded along y = 27.5 mm (mid-cell), a 15 mm notch along the bond, the impact as a
 //! prescribed x velocity of 23.25 m/s on the struck patch below the notch, growth fixed
 //! along the bond ([1, 0]) with the wave-speed growth rule, 1 mm cells, 30 µs (154 steps).
 //!
@@ -15,9 +15,12 @@
 //!   growth rule advances the tip by c_L·Δt per growing step, and the tip also moves with
 //!   the material (|v| ≈ 23 m/s ≈ 0.9 % of c_L);
 //! * the speed falls as the toughness rises: the crack extension at 30 µs drops by at
-//!   least 1 mm (two growth increments of h/2) from one toughness to the next, and the
+//!   least 0.5 mm (one growth increment of h/2) from one toughness to the next, and the
 //!   mean speed over the growth window (initiation to the end) strictly decreases.
-//!   Measured when the test was written: 38.7, 34.2, 29.2 mm; 1645, 1491, 1307 m/s.
+//!   Measured with the bond at mid-cell and the domain J (radius 6 mm): 22.1, 21.1,
+//!   19.6 mm. (With the bond on a node row, before: 38.7, 34.2, 29.2 mm — the node row
+//!   carried the crack 16 mm further; `algorithm.md` pitfall 9.) The weak dependence on a
+//!   tenfold toughness is the seed's wave rule's, not the material's (pitfall 12).
 
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
@@ -26,7 +29,7 @@ use fracture_e2e::{Server, fracture_bin};
 use serde_json::Value;
 
 /// Bond line of the scene (m).
-const BOND_Y: f64 = 0.027;
+const BOND_Y: f64 = 0.0275;
 /// Cell size of the scene (m).
 const H: f64 = 0.001;
 
@@ -195,8 +198,8 @@ fn rosakis_mini_toughness_sweep_through_the_service() {
     }
     for w in results.windows(2) {
         assert!(
-            w[1].extension <= w[0].extension - H,
-            "extension must drop by ≥ 1 mm as J_Ic rises {} → {}: {:.2} mm → {:.2} mm",
+            w[1].extension <= w[0].extension - 0.5 * H,
+            "extension must drop by ≥ 0.5 mm as J_Ic rises {} → {}: {:.2} mm → {:.2} mm",
             w[0].toughness,
             w[1].toughness,
             w[0].extension * 1e3,

@@ -177,7 +177,7 @@ fn job_lifecycle_results_readable_while_running_and_after() {
         .expect("csv")
         .text()
         .expect("text");
-    assert!(csv.starts_with("time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing\n"));
+    assert!(csv.starts_with("time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing,"));
 
     // Images of every recorded component and kind.
     let snaps = s.get_json(&format!("/api/v1/jobs/{id}/snapshots"));

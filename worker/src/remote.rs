@@ -1,6 +1,19 @@
 //! The remote worker: claims jobs from a server over HTTP (`/api/v1/worker/…`), runs them
 //! with [`run_scene`](crate::run_scene), heartbeats, obeys cancellation, and streams the
 //! results through an HTTP [`RunSink`], retrying transient failures.
+//!
+//! Memory: before building a job's simulation the worker estimates its memory
+//! (`fracture_api::cost`); a job over the worker's `max_memory` fails at once with the
+//! numbers, and otherwise the process's address space is capped (`RLIMIT_AS`) at what it
+//! uses now plus the estimate and a margin, so a run that still outgrows its estimate
+//! fails its allocation ("memory allocation of N bytes failed", which the server's
+//! supervisor reports in the job's message) instead of driving the machine into the
+//! out-of-memory killer.
+//!
+//! Storage: a server that answers 507 (its disk is full) is not failing transiently: the
+//! worker keeps the job and retries with back-off for [`STORAGE_BUDGET`] while it
+//! heartbeats, then fails the job with the server's message; claims pause while the
+//! server's disk is full (a claim there would only burn attempts).
 
 use std::sync::Arc;
 use std::sync::atomic::{AtomicBool, Ordering};
@@ -33,6 +46,9 @@ pub enum ClientError {
     /// Worth retrying: connection problems, 5xx, 503 during shutdown.
     #[error("transient: {0}")]
     Transient(String),
+    /// The server cannot store anything (507: its disk is full or failing).
+    #[error("the server cannot store results: {0}")]
+    Storage(String),
     /// Not worth retrying.
     #[error("{0}")]
     Fatal(String),
@@ -55,7 +71,12 @@ pub struct WorkerConfig {
     pub parent_pid: Option<u32>,
     /// Name of this worker.
     pub worker_id: String,
+    /// Jobs whose memory estimate exceeds this fail before they are built (bytes).
+    pub max_memory: Option<u64>,
 }
+
+/// How long uploads are retried while the server answers 507 (its disk is full).
+pub const STORAGE_BUDGET: Duration = Duration::from_secs(120);
 
 /// A small blocking client for the worker routes.
 struct Api {
@@ -82,6 +103,7 @@ impl Api {
         Err(match status {
             StatusCode::CONFLICT => ClientError::Fenced(msg),
             StatusCode::UNAUTHORIZED => ClientError::Unauthorized(msg),
+            StatusCode::INSUFFICIENT_STORAGE => ClientError::Storage(msg),
             s if s.is_server_error() || s == StatusCode::TOO_MANY_REQUESTS => {
                 ClientError::Transient(format!("{s}: {msg}"))
             }
@@ -114,7 +136,8 @@ impl Api {
         )
     }
 
-    /// Retry transient failures for up to `budget`.
+    /// Retry transient failures for up to `budget`, and a server without storage (507)
+    /// for up to [`STORAGE_BUDGET`] (its disk may be freed).
     fn retry<T>(
         &self,
         budget: Duration,
@@ -128,6 +151,11 @@ impl Api {
                     tracing::warn!(error = %e, "retrying");
                     std::thread::sleep(nap);
                     nap = (nap * 2).min(Duration::from_secs(2));
+                }
+                Err(ClientError::Storage(e)) if start.elapsed() < STORAGE_BUDGET.max(budget) => {
+                    tracing::warn!(error = %e, "the server's disk is full; retrying");
+                    std::thread::sleep(nap);
+                    nap = (nap * 2).min(Duration::from_secs(5));
                 }
                 r => return r,
             }
@@ -176,6 +204,12 @@ pub fn run_worker(cfg: WorkerConfig) -> anyhow::Result<()> {
             }
             Err(ClientError::Unauthorized(m)) => {
                 anyhow::bail!("the server refused the worker token: {m}")
+            }
+            Err(ClientError::Storage(m)) => {
+                // The server is there but cannot record a claim: wait for space.
+                failing_since = None;
+                tracing::warn!(error = %m, "the server's disk is full; not claiming for 5 s");
+                std::thread::sleep(Duration::from_secs(5));
             }
             Err(e) => {
                 let since = *failing_since.get_or_insert_with(Instant::now);
@@ -267,11 +301,28 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
     let summary = match fracture_api::validate::scene_from_value(claim.scene) {
         Ok(scene) => match ValidScene::new(scene.clone()) {
             Ok(valid) => {
-                let opts = RunOptions {
-                    threads: cfg.threads,
-                    flush_every: cfg.flush_every,
-                };
-                crate::run_scene(&valid, &opts, &mut sink)
+                let threads = cfg.threads.resolve();
+                let est = fracture_api::cost::memory_estimate(&scene, valid.size().particles);
+                match cfg.max_memory.filter(|m| est.total > *m) {
+                    Some(max) => failed_summary(
+                        Some(&scene),
+                        FailureKind::InvalidScene,
+                        format!(
+                            "the run needs about {} of memory ({est}), more than this \
+                             worker's limit of {}",
+                            fracture_api::cost::bytes(est.total),
+                            fracture_api::cost::bytes(max)
+                        ),
+                    ),
+                    None => {
+                        let _cap = MemoryCap::set(est.total, threads);
+                        let opts = RunOptions {
+                            threads: cfg.threads,
+                            flush_every: cfg.flush_every,
+                        };
+                        crate::run_scene(&valid, &opts, &mut sink)
+                    }
+                }
             }
             Err(e) => failed_summary(
                 Some(&scene),
@@ -291,6 +342,81 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
     let _ = stop_tx.send(());
     let _ = hb.join();
     tracing::info!(job = %job, status = ?summary.status, "run ended");
+}
+
+/// The address-space cap of a running job (`RLIMIT_AS`, soft limit), lifted when dropped.
+struct MemoryCap {
+    #[cfg(unix)]
+    previous: Option<rustix::process::Rlimit>,
+}
+
+impl MemoryCap {
+    /// Cap the process at its current address space plus 1.5 × `estimate`, 1 GiB and
+    /// 128 MiB per solver thread (stacks and allocator arenas reserve address space).
+    fn set(estimate: u64, threads: usize) -> MemoryCap {
+        #[cfg(unix)]
+        {
+            use rustix::process::{Resource, Rlimit, getrlimit, setrlimit};
+            let now = current_address_space().unwrap_or(0);
+            let margin = (1u64 << 30) + (threads as u64).saturating_mul(128 << 20);
+            let cap = now
+                .saturating_add(estimate.saturating_add(estimate / 2))
+                .saturating_add(margin);
+            let previous = getrlimit(Resource::As);
+            if previous.current.is_some_and(|c| c <= cap) {
+                return MemoryCap { previous: None };
+            }
+            let new = Rlimit {
+                current: Some(cap),
+                maximum: previous.maximum,
+            };
+            match setrlimit(Resource::As, new) {
+                Ok(()) => {
+                    tracing::info!(
+                        cap = %fracture_api::cost::bytes(cap),
+                        estimate = %fracture_api::cost::bytes(estimate),
+                        "memory cap of this job"
+                    );
+                    MemoryCap {
+                        previous: Some(previous),
+                    }
+                }
+                Err(e) => {
+                    tracing::warn!(error = %e, "cannot cap this worker's memory");
+                    MemoryCap { previous: None }
+                }
+            }
+        }
+        #[cfg(not(unix))]
+        {
+            let _ = (estimate, threads);
+            MemoryCap {}
+        }
+    }
+}
+
+impl Drop for MemoryCap {
+    fn drop(&mut self) {
+        #[cfg(unix)]
+        if let Some(p) = self.previous.take() {
+            let _ = rustix::process::setrlimit(rustix::process::Resource::As, p);
+        }
+    }
+}
+
+/// The process's address space now (`VmSize` of `/proc/self/status`).
+#[cfg(unix)]
+fn current_address_space() -> Option<u64> {
+    let t = std::fs::read_to_string("/proc/self/status").ok()?;
+    let kb: u64 = t
+        .lines()
+        .find_map(|l| l.strip_prefix("VmSize:"))?
+        .trim()
+        .trim_end_matches("kB")
+        .trim()
+        .parse()
+        .ok()?;
+    Some(kb.saturating_mul(1024))
 }
 
 /// The [`RunSink`] of a job: every call is an HTTP request to the server, fenced.
@@ -401,5 +527,48 @@ impl RunSink for HttpSink<'_> {
         self.api
             .retry(Self::BUDGET, || self.api.post_json(&path, &f).map(drop))
             .map_err(|e| self.fail(e))
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+    use std::io::{Read, Write};
+
+    /// A server that answers every request with `status` and an error body.
+    fn answering(status: &'static str) -> String {
+        let l = std::net::TcpListener::bind("127.0.0.1:0").unwrap();
+        let addr = l.local_addr().unwrap();
+        std::thread::spawn(move || {
+            for s in l.incoming().flatten().take(4) {
+                let mut s = s;
+                let mut buf = [0u8; 4096];
+                let _ = s.read(&mut buf);
+                let body =
+                    r#"{"error":"insufficient_storage","message":"the disk is full","details":[]}"#;
+                let _ = write!(
+                    s,
+                    "HTTP/1.1 {status}\r\ncontent-type: application/json\r\ncontent-length: {}\r\nconnection: close\r\n\r\n{body}",
+                    body.len()
+                );
+            }
+        });
+        format!("http://{addr}")
+    }
+
+    /// A server whose disk is full (507) is not a transient failure to burn retries and
+    /// attempts on: the worker sees `Storage` with the server's message.
+    #[test]
+    fn a_507_is_a_storage_error_with_the_servers_message() {
+        let api = Api {
+            http: Client::new(),
+            base: answering("507 Insufficient Storage"),
+            token: "t".into(),
+        };
+        match api.post_json("claim", &serde_json::json!({})) {
+            Err(ClientError::Storage(m)) => assert!(m.contains("disk is full"), "{m}"),
+            other => panic!("{:?}", other.map(|r| r.status())),
+        }
     }
 }

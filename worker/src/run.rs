@@ -1,4 +1,7 @@
 //! The run loop.
+//!
+//! (Over 700 lines because its unit tests, which drive the loop with a scripted model, live
+//! here with it: the loop itself is about 430 lines.)
 
 use std::any::Any;
 use std::panic::{AssertUnwindSafe, catch_unwind};

@@ -66,6 +66,12 @@ fn local_output_writes_the_run_output_files() {
         k1: 1.0e6,
         k2: 2.0e4,
         growing: true,
+        j1_half: 101.0,
+        j2_half: -4.0,
+        j1_double: 99.0,
+        j2_double: -6.0,
+        k1_cod: 1.1e6,
+        k2_cod: 3.0e4,
     };
     sink.energy(&[e, e]).unwrap();
     sink.crack_tips(&[t]).unwrap();
@@ -116,14 +122,16 @@ fn local_output_writes_the_run_output_files() {
     assert_eq!(cols, vec![1.0e-6, 2.0, 3.0, 4.0, 0.5, -0.25]);
 
     let tips = lines(&out.join("crack_tips.csv"));
-    assert_eq!(
-        tips[0],
-        "time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing"
+    // run-output.md's columns first; the project's extension columns after them.
+    assert!(
+        tips[0].starts_with("time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing,"),
+        "{}",
+        tips[0]
     );
     assert_eq!(tips[0], CRACK_TIPS_CSV_HEADER);
     assert_eq!(tips.len(), 2);
     let cols: Vec<&str> = tips[1].split(',').collect();
-    assert_eq!(cols.len(), 12);
+    assert_eq!(cols.len(), 18);
     assert_eq!((cols[1], cols[2], cols[11]), ("1", "0", "1"));
     assert_eq!(cols[6].parse::<f64>().unwrap(), 500.0);
 

@@ -72,6 +72,12 @@ fn tip(i: usize, t: u32) -> CrackTipRow {
         k1: 1.1e6,
         k2: -2.0e4,
         growing: i % 2 == 1,
+        j1_half: 10.1 / 3.0,
+        j2_half: f64::NAN,
+        j1_double: 9.9 / 3.0,
+        j2_double: -2.0e-3,
+        k1_cod: 1.2e6,
+        k2_cod: -3.0e4,
     }
 }
 

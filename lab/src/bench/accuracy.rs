@@ -8,7 +8,8 @@ use std::time::Instant;
 
 use fracture_verify::{Problem, Settings, ShapeFunction};
 
-use super::{Machine, csv_line, markdown_table, sig, write_file};
+use super::Machine;
+use crate::report::{csv_line, markdown_table, sig, write_file};
 
 /// Which ladder to run.
 #[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
@@ -103,6 +104,9 @@ fn resolutions(p: Problem) -> (Vec<f64>, f64) {
         Problem::Freund => (vec![0.002, 0.001, 0.0005], 0.001),
         Problem::VibratingBar => (vec![1.0, 0.5, 0.25], 0.5),
         Problem::WaveSpeed => (vec![0.002, 0.001, 0.0005], 0.001),
+        Problem::InclinedCrack => (vec![0.004, 0.002, 0.001], 0.002),
+        Problem::ShearKink => (vec![0.004, 0.002, 0.001], 0.002),
+        Problem::KalthoffWinkler => (vec![0.002, 0.001, 0.0005], 0.001),
     }
 }
 
@@ -540,16 +544,20 @@ fn write_reports(
     threads: fracture_solver::Parallelism,
     cost: Cost,
 ) -> anyhow::Result<()> {
-    write_file(out, "accuracy.csv", &csv(rows))?;
+    write_file(out, "accuracy.csv", csv(rows))?;
     write_file(
         out,
         "accuracy.md",
-        &markdown(rows, machine, ladder, threads, cost),
+        markdown(rows, machine, ladder, threads, cost),
     )?;
-    write_file(out, "accuracy.svg", &super::svg::accuracy_plot(rows, cost))?;
+    write_file(
+        out,
+        "accuracy.svg",
+        super::accuracy_plot::accuracy_plot(rows, cost),
+    )?;
     write_file(
         out,
         "accuracy.json",
-        &serde_json::to_string_pretty(&serde_json::json!({"machine": machine, "runs": rows}))?,
+        serde_json::to_string_pretty(&serde_json::json!({"machine": machine, "runs": rows}))?,
     )
 }

@@ -1,56 +1,15 @@
 //! `fracture bench accuracy | throughput | skip`: the accuracy ladder of the verification
 //! problems, the throughput matrix with the memory-bandwidth model, and the figures of what a
 //! scene does not pay for. Every figure of `docs/accuracy.md` and `docs/performance.md` comes
-//! from one of these commands, so it can be regenerated on an idle machine.
+//! from one of these commands, so it can be regenerated on an idle machine. Here: what the
+//! benchmarks measure with (the median step, CPU time, the machine); their tables and plots
+//! are drawn with [`crate::report`].
 
 pub mod accuracy;
+pub mod accuracy_plot;
 pub mod command;
 pub mod skip;
-pub mod svg;
 pub mod throughput;
-
-use std::path::Path;
-
-/// Create `dir` and write `name` into it.
-pub fn write_file(dir: &Path, name: &str, text: &str) -> anyhow::Result<()> {
-    use anyhow::Context;
-    std::fs::create_dir_all(dir).with_context(|| format!("cannot create {}", dir.display()))?;
-    let path = dir.join(name);
-    std::fs::write(&path, text).with_context(|| format!("cannot write {}", path.display()))
-}
-
-/// A Markdown table from a header and rows.
-pub fn markdown_table(header: &[&str], rows: &[Vec<String>]) -> String {
-    let mut s = format!("| {} |\n", header.join(" | "));
-    s.push_str(&format!(
-        "|{}\n",
-        header.iter().map(|_| " --- |").collect::<String>()
-    ));
-    for r in rows {
-        s.push_str(&format!("| {} |\n", r.join(" | ")));
-    }
-    s
-}
-
-/// A CSV line (fields must not contain commas; the callers' fields are numbers and names).
-pub fn csv_line(fields: &[String]) -> String {
-    let mut s = fields.join(",");
-    s.push('\n');
-    s
-}
-
-/// Format a float for a table with `digits` significant digits; "–" for NaN.
-pub fn sig(x: f64, digits: usize) -> String {
-    if !x.is_finite() {
-        return "–".into();
-    }
-    if x == 0.0 {
-        return "0".into();
-    }
-    let mag = x.abs().log10().floor() as i32;
-    let decimals = (digits as i32 - 1 - mag).max(0) as usize;
-    format!("{x:.decimals$}")
-}
 
 /// Median of `xs` (NaN when empty): the per-step time least disturbed by other load.
 pub fn median(xs: &[f64]) -> f64 {

@@ -11,8 +11,9 @@ use fracture_api::scene::FieldKind;
 use fracture_api::validate::scene_from_value;
 use fracture_solver::{Simulation, SolverConfig, WorkCounters};
 
+use super::Machine;
 use super::throughput::{Case, case_scene};
-use super::{Machine, markdown_table, write_file};
+use crate::report::{markdown_table, write_file};
 
 /// Options of `fracture bench skip`.
 #[derive(Debug, Clone)]

@@ -16,7 +16,8 @@ use fracture_solver::shape::Weights2;
 use fracture_solver::{Simulation, SolverConfig};
 use rayon::prelude::*;
 
-use super::{Machine, csv_line, markdown_table, sig, write_file};
+use super::Machine;
+use crate::report::{csv_line, markdown_table, sig, write_file};
 
 /// A throughput case.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -170,7 +171,7 @@ impl BytesModel {
     }
 }
 
-/// STREAM-like triad a[i] = b[i] + s·c[i] over three arrays of `n` f64 on `threads` threads:
+/// STREAM-like triad `a[i] = b[i] + s·c[i]` over three arrays of `n` f64 on `threads` threads:
 /// the best of `reps` repetitions, in bytes per second (24 bytes per element, the STREAM
 /// convention, which does not count the write-allocate read of a).
 pub fn triad_bandwidth(n: usize, threads: usize, reps: usize) -> anyhow::Result<f64> {

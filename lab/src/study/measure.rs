@@ -1,0 +1,277 @@
+//! What one run measures (`Measured`): the tip of the first crack, collected by the run's
+//! sink (`Collect`), the speed measures taken from its length (initiation, window means,
+//! moving-box speeds, the slow-down), the distance from the bond, the fringe snapshots.
+
+use fracture_api::Scene;
+use fracture_api::results::{CrackTipRow, EnergyRow, Progress, RunStatus, Snapshot, Summary};
+use fracture_worker::{Control, RunOptions, RunSink, SinkError, run_scene};
+
+/// Times (s after impact) of the fringe pictures.
+pub(super) const FRINGE_TIMES: [f64; 2] = [4.0e-5, 6.0e-5];
+
+/// What one run measured.
+#[derive(Debug, Clone)]
+pub(super) struct Measured {
+    pub(super) status: RunStatus,
+    pub(super) message: Option<String>,
+    pub(super) wall: f64,
+    pub(super) psps: f64,
+    pub(super) steps: u64,
+    pub(super) particles: u64,
+    /// Tip samples: time (s), crack length (m), tip y (m), the solver's tip speed (m/s,
+    /// moving box over the scene's `output.speed_window`).
+    pub(super) t: Vec<f64>,
+    pub(super) len: Vec<f64>,
+    pub(super) y: Vec<f64>,
+    pub(super) x: Vec<f64>,
+    pub(super) speed: Vec<f64>,
+    /// Fringe snapshots at `FRINGE_TIMES`.
+    pub(super) fringes: Vec<Snapshot>,
+    /// Largest distance (m) of the tip from the bond's material line: the tip's y against the
+    /// initial bond y plus the material's y displacement at the tip, at every snapshot.
+    pub(super) off_material: f64,
+}
+
+impl Measured {
+    /// Time of the first growth (s), if any.
+    pub(super) fn initiation(&self) -> Option<f64> {
+        let l0 = *self.len.first()?;
+        self.t
+            .iter()
+            .zip(&self.len)
+            .find(|(_, l)| **l > l0 + 1.0e-5)
+            .map(|(t, _)| *t)
+    }
+    /// The initiation time for tables: "12.3 µs", or "none".
+    pub(super) fn initiation_label(&self) -> String {
+        self.initiation()
+            .map_or("none".to_string(), |t| format!("{:.1} µs", t * 1e6))
+    }
+    /// Mean tip speed from initiation to the end of the run (m/s), if the crack grew.
+    pub(super) fn mean_to_end(&self) -> Option<f64> {
+        let t0 = self.initiation()?;
+        self.mean_speed(t0, self.t.last().copied().unwrap_or(t0))
+    }
+    /// Crack length at time `t` (linear interpolation, clamped).
+    fn length_at(&self, t: f64) -> f64 {
+        match self.t.iter().position(|&x| x >= t) {
+            None => self.len.last().copied().unwrap_or(0.0),
+            Some(0) => self.len.first().copied().unwrap_or(0.0),
+            Some(i) => {
+                let (t0, t1) = (self.t[i - 1], self.t[i]);
+                let f = if t1 > t0 { (t - t0) / (t1 - t0) } else { 1.0 };
+                self.len[i - 1] + f * (self.len[i] - self.len[i - 1])
+            }
+        }
+    }
+    /// Mean tip speed over [a, b] (s), from the crack length.
+    pub(super) fn mean_speed(&self, a: f64, b: f64) -> Option<f64> {
+        let end = *self.t.last()?;
+        (b <= end + 1e-12 && b > a).then(|| (self.length_at(b) - self.length_at(a)) / (b - a))
+    }
+    /// Moving-box speed over `w` (s) at every sample that has the whole box.
+    pub(super) fn box_speed(&self, w: f64) -> Vec<[f64; 2]> {
+        let Some(&end) = self.t.last() else {
+            return Vec::new();
+        };
+        self.t
+            .iter()
+            .filter(|&&t| t - 0.5 * w >= 0.0 && t + 0.5 * w <= end)
+            .map(|&t| {
+                [
+                    t,
+                    (self.length_at(t + 0.5 * w) - self.length_at(t - 0.5 * w)) / w,
+                ]
+            })
+            .collect()
+    }
+    /// Largest distance of the tip from the initial bond line (m): the first tip sample is
+    /// on the bond.
+    pub(super) fn off_bond(&self) -> f64 {
+        let y0 = self.y.first().copied().unwrap_or(0.0);
+        self.y.iter().map(|y| (y - y0).abs()).fold(0.0, f64::max)
+    }
+}
+
+/// Mean y displacement (m) of the material on the bond at the tip: the nodes within one cell
+/// of (x_tip, y_bond) in x and 1.5 cells in y, both sides of the bond.
+fn bond_displacement(snap: &Snapshot, x_tip: f64, y_bond: f64) -> Option<f64> {
+    let uy = snap.component("uy")?;
+    let h = snap.cell_size;
+    let (nx, ny) = (snap.nx as usize, snap.ny as usize);
+    let (mut sum, mut n) = (0.0, 0.0);
+    for iy in 0..ny {
+        let y = snap.origin[1] + iy as f64 * h;
+        if (y - y_bond).abs() > 1.5 * h {
+            continue;
+        }
+        for ix in 0..nx {
+            let x = snap.origin[0] + ix as f64 * h;
+            if (x - x_tip).abs() > h {
+                continue;
+            }
+            let v = f64::from(*uy.values.get(iy * nx + ix)?);
+            if v.is_finite() {
+                sum += v;
+                n += 1.0;
+            }
+        }
+    }
+    (n > 0.0).then(|| sum / n)
+}
+
+/// The sink of a study run: keeps the tip of the first crack and the fringe snapshots.
+struct Collect {
+    m: Measured,
+}
+
+impl RunSink for Collect {
+    fn progress(&mut self, _p: &Progress) -> Result<Control, SinkError> {
+        Ok(Control::Continue)
+    }
+    fn energy(&mut self, _rows: &[EnergyRow]) -> Result<(), SinkError> {
+        Ok(())
+    }
+    fn crack_tips(&mut self, rows: &[CrackTipRow]) -> Result<(), SinkError> {
+        // The notch runs from the struck edge (tip 0, the mouth) to its tip (tip 1).
+        for r in rows.iter().filter(|r| r.crack == 0 && r.tip == 1) {
+            self.m.t.push(r.time);
+            self.m.len.push(r.length);
+            self.m.y.push(r.y);
+            self.m.x.push(r.x);
+            self.m.speed.push(r.speed);
+        }
+        Ok(())
+    }
+    fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError> {
+        if let (Some(&y_tip), Some(&y0), Some(&x_tip)) =
+            (self.m.y.last(), self.m.y.first(), self.m.x.last())
+            && let Some(uy) = bond_displacement(snap, x_tip, y0)
+        {
+            self.m.off_material = self.m.off_material.max((y_tip - y0 - uy).abs());
+        }
+        if FRINGE_TIMES
+            .iter()
+            .any(|&t| (snap.time - t).abs() < 0.25e-6)
+        {
+            self.m.fringes.push(snap.clone());
+        }
+        Ok(())
+    }
+    fn finish(&mut self, s: &Summary) -> Result<(), SinkError> {
+        self.m.status = s.status;
+        self.m.message = s.message.clone();
+        self.m.wall = s.wall_seconds;
+        self.m.psps = s.particle_steps_per_second;
+        self.m.steps = s.steps;
+        self.m.particles = s.particles;
+        Ok(())
+    }
+}
+
+pub(super) fn run_one(scene: &Scene, threads: fracture_solver::Parallelism) -> Measured {
+    let mut sink = Collect {
+        m: Measured {
+            status: RunStatus::Failed,
+            message: None,
+            wall: 0.0,
+            psps: 0.0,
+            steps: 0,
+            particles: 0,
+            t: Vec::new(),
+            len: Vec::new(),
+            y: Vec::new(),
+            x: Vec::new(),
+            speed: Vec::new(),
+            fringes: Vec::new(),
+            off_material: 0.0,
+        },
+    };
+    let opts = RunOptions {
+        threads,
+        ..RunOptions::default()
+    };
+    match fracture_api::ValidScene::new(scene.clone()) {
+        Ok(valid) => {
+            run_scene(&valid, &opts, &mut sink);
+        }
+        Err(e) => sink.m.message = Some(format!("invalid scene:\n{e}")),
+    }
+    sink.m
+}
+
+/// The first fall of the moving-box speed by at least 30 % from its running peak (after the
+/// peak has reached 500 m/s): the time (s) and the relative drop.
+pub(super) fn slow_down(m: &Measured, w: f64) -> (Option<f64>, f64) {
+    let mut peak: f64 = 0.0;
+    for p in m.box_speed(w) {
+        peak = peak.max(p[1]);
+        if peak > 500.0 && p[1] < 0.7 * peak {
+            return (Some(p[0]), 1.0 - p[1] / peak);
+        }
+    }
+    (None, 0.0)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    fn measured(t: Vec<f64>, len: Vec<f64>) -> Measured {
+        let n = t.len();
+        Measured {
+            status: RunStatus::Completed,
+            message: None,
+            wall: 0.0,
+            psps: 0.0,
+            steps: 0,
+            particles: 0,
+            t,
+            len,
+            y: vec![0.0; n],
+            x: vec![0.0; n],
+            speed: vec![0.0; n],
+            fringes: Vec::new(),
+            off_material: 0.0,
+        }
+    }
+
+    /// A tip at rest until 10 µs, then at 1000 m/s: initiation, mean and box speeds.
+    #[test]
+    fn speeds_from_crack_length() {
+        let t: Vec<f64> = (0..=400).map(|i| i as f64 * 1e-7).collect();
+        let len: Vec<f64> = t
+            .iter()
+            .map(|&t| 0.025 + 1000.0 * (t - 1.0e-5).max(0.0))
+            .collect();
+        let m = measured(t, len);
+        let t0 = m.initiation().unwrap_or(0.0);
+        assert!((t0 - 1.0e-5).abs() < 1.5e-7, "initiation {t0}");
+        let v = m.mean_speed(2.0e-5, 3.0e-5).unwrap_or(0.0);
+        assert!((v - 1000.0).abs() < 1e-6, "{v}");
+        assert!(m.mean_speed(2.0e-5, 5.0e-5).is_none());
+        let b = m.box_speed(2.0e-6);
+        assert!(b.iter().all(|p| p[1] >= -1e-9 && p[1] <= 1000.0 + 1e-6));
+        assert!(b.iter().any(|p| (p[1] - 1000.0).abs() < 1e-6));
+        assert_eq!(slow_down(&m, 2.0e-6).0, None);
+    }
+
+    /// A tip that runs, stops and runs: the slow-down is found where it stops.
+    #[test]
+    fn slow_down_is_found() {
+        let t: Vec<f64> = (0..=600).map(|i| i as f64 * 1e-7).collect();
+        let len: Vec<f64> = t
+            .iter()
+            .map(|&t| {
+                let run1 = 1500.0 * (t.min(3.0e-5) - 1.0e-5).max(0.0);
+                let run2 = 1500.0 * (t - 4.0e-5).max(0.0);
+                0.025 + run1 + run2
+            })
+            .collect();
+        let m = measured(t, len);
+        let (at, drop) = slow_down(&m, 2.0e-6);
+        let at = at.unwrap_or(0.0);
+        assert!((at - 3.0e-5).abs() < 1.0e-6, "slow-down at {at}");
+        assert!(drop >= 0.3);
+    }
+}

@@ -1,0 +1,320 @@
+//! A run's field snapshots as VTK files for ParaView (`docs/vtk.md`):
+//!
+//! * one `fields_NNNNN.vti` per snapshot: the nodal grid as XML ImageData (origin, spacing =
+//!   the cell size), every component as a Float32 point array (NaN where no material touches
+//!   the node), `velocity` = (vx, vy, 0) and `displacement` = (ux, uy, 0) as vectors where
+//!   both components are recorded, and `occupied` (UInt8, 1 where the node has material) to
+//!   threshold on;
+//! * one `cracks_NNNNN.vtp` per snapshot: the crack lines as XML PolyData polylines (z = 0),
+//!   with the crack's index as cell data `crack`; an empty PolyData when there are none;
+//! * `fields.pvd` and `cracks.pvd`: the time series (ParaView's collection format), each
+//!   entry the snapshot's simulated time in seconds.
+//!
+//! Snapshots carry no particles, so there are no `.vtu` particle files.
+//!
+//! The `.vti`/`.vtp` files are written by [`vtkio`] (inline base64 binary, XML format 1.0,
+//! uncompressed); the `.pvd` collection, which vtkio does not model, is a few lines of XML
+//! written here. ImageData stores origin and spacing as Float32 (vtkio's model), a relative
+//! error of about 1e-7.
+
+use std::fs;
+use std::path::{Path, PathBuf};
+
+use fracture_api::results::Snapshot;
+use vtkio::model::{
+    Attribute, Attributes, ByteOrder, DataArray, DataSet, Extent, ImageDataPiece, Piece,
+    PolyDataPiece, Version, VertexNumbers, Vtk,
+};
+
+use crate::mcapfile::{self, McapFileError};
+
+/// Why an export failed.
+#[derive(Debug, thiserror::Error)]
+pub enum VtkError {
+    /// A file could not be written.
+    #[error("writing {path}: {source}")]
+    Io {
+        /// The file.
+        path: PathBuf,
+        /// What went wrong.
+        source: std::io::Error,
+    },
+    /// vtkio could not encode a data set.
+    #[error("encoding {name}: {message}")]
+    Encode {
+        /// The file name.
+        name: String,
+        /// vtkio's message.
+        message: String,
+    },
+    /// A snapshot is inconsistent (component length ≠ nx·ny).
+    #[error("snapshot {index}: component `{component}` has {len} values for {nodes} nodes")]
+    BadSnapshot {
+        /// Snapshot index.
+        index: u32,
+        /// Component name.
+        component: String,
+        /// Its length.
+        len: usize,
+        /// nx·ny.
+        nodes: usize,
+    },
+    /// The MCAP file could not be read.
+    #[error(transparent)]
+    Mcap(#[from] McapFileError),
+}
+
+/// The files of an exported series.
+#[derive(Debug, Clone, PartialEq)]
+pub struct VtkSeries {
+    /// The grid time series: open this in ParaView.
+    pub fields_pvd: PathBuf,
+    /// The crack time series.
+    pub cracks_pvd: PathBuf,
+    /// Every file written, the two `.pvd` first.
+    pub files: Vec<PathBuf>,
+}
+
+/// Name of the grid file of the `k`-th snapshot of a series.
+pub fn grid_file_name(k: usize) -> String {
+    format!("fields_{k:05}.vti")
+}
+
+/// Name of the crack file of the `k`-th snapshot of a series.
+pub fn crack_file_name(k: usize) -> String {
+    format!("cracks_{k:05}.vtp")
+}
+
+/// The nodal grid of a snapshot as a VTK ImageData data set.
+pub fn image_data(snap: &Snapshot) -> Result<Vtk, VtkError> {
+    let nx = snap.nx as usize;
+    let ny = snap.ny as usize;
+    let nodes = nx * ny;
+    for c in &snap.components {
+        if c.values.len() != nodes {
+            return Err(VtkError::BadSnapshot {
+                index: snap.index,
+                component: c.name.clone(),
+                len: c.values.len(),
+                nodes,
+            });
+        }
+    }
+    let mut point = Vec::new();
+    for c in &snap.components {
+        point.push(Attribute::DataArray(
+            DataArray::scalars(c.name.clone(), 1).with_data(c.values.clone()),
+        ));
+    }
+    for (name, a, b) in [("velocity", "vx", "vy"), ("displacement", "ux", "uy")] {
+        if let (Some(a), Some(b)) = (snap.component(a), snap.component(b)) {
+            let v: Vec<f32> = a
+                .values
+                .iter()
+                .zip(&b.values)
+                .flat_map(|(&x, &y)| [x, y, 0.0])
+                .collect();
+            point.push(Attribute::DataArray(DataArray::vectors(name).with_data(v)));
+        }
+    }
+    let occupied: Vec<u8> = (0..nodes)
+        .map(|n| {
+            u8::from(
+                snap.components
+                    .iter()
+                    .any(|c| c.values[n].is_finite() && c.name != "material"),
+            )
+        })
+        .collect();
+    point.push(Attribute::DataArray(
+        DataArray::scalars("occupied", 1).with_data(occupied),
+    ));
+    let extent = Extent::Ranges([
+        0..=(nx as i32 - 1).max(0),
+        0..=(ny as i32 - 1).max(0),
+        0..=0,
+    ]);
+    let h = snap.cell_size as f32;
+    Ok(Vtk {
+        version: Version::new_xml(1, 0),
+        title: format!("snapshot {} t = {} s", snap.index, snap.time),
+        byte_order: ByteOrder::LittleEndian,
+        file_path: None,
+        data: DataSet::ImageData {
+            extent: extent.clone(),
+            origin: [snap.origin[0] as f32, snap.origin[1] as f32, 0.0],
+            spacing: [h, h, h],
+            meta: None,
+            pieces: vec![Piece::Inline(Box::new(ImageDataPiece {
+                extent,
+                data: Attributes {
+                    point,
+                    cell: vec![],
+                },
+            }))],
+        },
+    })
+}
+
+/// The cracks of a snapshot as a VTK PolyData data set: one polyline per crack.
+pub fn crack_poly_data(snap: &Snapshot) -> Vtk {
+    let mut points: Vec<f64> = Vec::new();
+    let mut vertices: Vec<u32> = Vec::new();
+    let mut ids: Vec<i32> = Vec::new();
+    let mut n = 0u32;
+    for (k, crack) in snap.cracks.iter().enumerate() {
+        if crack.is_empty() {
+            continue;
+        }
+        vertices.push(crack.len() as u32);
+        for p in crack {
+            points.extend([p[0], p[1], 0.0]);
+            vertices.push(n);
+            n += 1;
+        }
+        ids.push(k as i32);
+    }
+    let lines = (!ids.is_empty()).then_some(VertexNumbers::Legacy {
+        num_cells: ids.len() as u32,
+        vertices,
+    });
+    Vtk {
+        version: Version::new_xml(1, 0),
+        title: format!("cracks of snapshot {} t = {} s", snap.index, snap.time),
+        byte_order: ByteOrder::LittleEndian,
+        file_path: None,
+        data: DataSet::inline(PolyDataPiece {
+            points: points.into(),
+            lines,
+            data: Attributes {
+                point: vec![],
+                cell: vec![Attribute::DataArray(
+                    DataArray::scalars("crack", 1).with_data(ids),
+                )],
+            },
+            ..Default::default()
+        }),
+    }
+}
+
+/// A `.pvd` collection: (time in s, file name relative to the `.pvd`) per entry.
+pub fn pvd(entries: &[(f64, String)]) -> String {
+    let mut s = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" \
+         byte_order=\"LittleEndian\">\n  <Collection>\n",
+    );
+    for (t, file) in entries {
+        // `{:e}` of an f64 is the shortest string that reads back as the same number.
+        s.push_str(&format!(
+            "    <DataSet timestep=\"{t:e}\" group=\"\" part=\"0\" file=\"{}\"/>\n",
+            xml_escape(file)
+        ));
+    }
+    s.push_str("  </Collection>\n</VTKFile>\n");
+    s
+}
+
+fn xml_escape(s: &str) -> String {
+    s.replace('&', "&amp;")
+        .replace('"', "&quot;")
+        .replace('<', "&lt;")
+        .replace('>', "&gt;")
+}
+
+fn xml_bytes(vtk: Vtk, name: &str) -> Result<Vec<u8>, VtkError> {
+    let mut out = Vec::new();
+    vtk.write_xml(&mut out).map_err(|e| VtkError::Encode {
+        name: name.to_string(),
+        message: e.to_string(),
+    })?;
+    Ok(out)
+}
+
+/// The files of a series in memory, as (name, bytes): `fields.pvd`, `cracks.pvd`, then per
+/// snapshot its `.vti` and `.vtp`. For a server packing them into an archive.
+pub fn series_files(snaps: &[Snapshot]) -> Result<Vec<(String, Vec<u8>)>, VtkError> {
+    let mut files = Vec::with_capacity(2 + 2 * snaps.len());
+    let mut grids = Vec::new();
+    let mut cracks = Vec::new();
+    let mut data = Vec::new();
+    for (k, s) in snaps.iter().enumerate() {
+        let (g, c) = (grid_file_name(k), crack_file_name(k));
+        data.push((g.clone(), xml_bytes(image_data(s)?, &g)?));
+        data.push((c.clone(), xml_bytes(crack_poly_data(s), &c)?));
+        grids.push((s.time, g));
+        cracks.push((s.time, c));
+    }
+    files.push(("fields.pvd".to_string(), pvd(&grids).into_bytes()));
+    files.push(("cracks.pvd".to_string(), pvd(&cracks).into_bytes()));
+    files.extend(data);
+    Ok(files)
+}
+
+/// Write a series into `dir` (created if missing): `fields.pvd`, `cracks.pvd` and the
+/// per-snapshot files. Files of an earlier export with more snapshots are not removed.
+pub fn write_series(dir: &Path, snaps: &[Snapshot]) -> Result<VtkSeries, VtkError> {
+    fs::create_dir_all(dir).map_err(|source| VtkError::Io {
+        path: dir.to_path_buf(),
+        source,
+    })?;
+    let mut written = Vec::new();
+    for (name, bytes) in series_files(snaps)? {
+        let path = dir.join(name);
+        fs::write(&path, bytes).map_err(|source| VtkError::Io {
+            path: path.clone(),
+            source,
+        })?;
+        written.push(path);
+    }
+    Ok(VtkSeries {
+        fields_pvd: dir.join("fields.pvd"),
+        cracks_pvd: dir.join("cracks.pvd"),
+        files: written,
+    })
+}
+
+/// Export the snapshots of a run's `fields.mcap` into `dir`.
+pub fn export_mcap(mcap: &Path, dir: &Path) -> Result<VtkSeries, VtkError> {
+    let snaps = mcapfile::read_snapshots(mcap)?;
+    write_series(dir, &snaps)
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn pvd_lists_times_and_files() {
+        let s = pvd(&[(0.0, "a.vti".into()), (1.25e-5, "b&c.vti".into())]);
+        assert!(s.contains("timestep=\"0e0\""));
+        assert!(s.contains("timestep=\"1.25e-5\" group=\"\" part=\"0\" file=\"b&amp;c.vti\""));
+        assert_eq!("1.25e-5".parse::<f64>().ok(), Some(1.25e-5));
+    }
+
+    #[test]
+    fn inconsistent_snapshots_are_refused() {
+        let s = Snapshot {
+            index: 7,
+            time: 0.0,
+            nx: 3,
+            ny: 2,
+            origin: [0.0, 0.0],
+            cell_size: 1.0,
+            fields: vec![],
+            components: vec![fracture_api::results::FieldComponent {
+                name: "sxx".into(),
+                values: vec![0.0; 5],
+            }],
+            cracks: vec![],
+        };
+        assert!(matches!(
+            image_data(&s),
+            Err(VtkError::BadSnapshot {
+                index: 7,
+                len: 5,
+                nodes: 6,
+                ..
+            })
+        ));
+    }
+}

@@ -1,0 +1,249 @@
+//! The worker protocol (`/api/v1/worker/…`, worker token): claim (long poll), heartbeat,
+//! history batches, snapshot upload, finish. Every write names the claim's fence; a stale
+//! one is 409 (`StoreError::Fenced`) and the worker drops the job.
+
+use std::time::Duration;
+
+use axum::Json;
+use axum::extract::{Path, State};
+use axum::http::StatusCode;
+use axum::response::{IntoResponse, Response};
+use fracture_api::Scene;
+use fracture_api::jobs::{ErrorBody, JobInfo, JobStatus, SnapshotInfo};
+use fracture_api::protocol::{
+    Claim, ClaimRequest, CrackTipBatch, EnergyBatch, FinishRequest, Heartbeat, HeartbeatReply,
+};
+use fracture_results::codec;
+use serde::Deserialize;
+
+use super::auth::WorkerToken;
+use super::{blocking, job_or_404};
+use crate::error::{ApiError, ApiJson, ApiQuery, RawBody};
+use crate::events::JobEvent;
+use crate::files::Record;
+use crate::server::AppState;
+use crate::store::StoreError;
+
+/// Claim the best queued job, waiting up to `wait_seconds` (200 with the claim, 204 none).
+#[utoipa::path(post, path = "/api/v1/worker/claim", tag = "worker",
+    request_body(content = ClaimRequest, content_type = "application/json"),
+    responses((status = 200, description = "The claim", body = Claim),
+        (status = 204, description = "No job"),
+        (status = 401, description = "Missing or wrong worker token", body = ErrorBody)),
+    security(("bearer" = [])))]
+pub(super) async fn worker_claim(
+    State(st): State<AppState>,
+    _: WorkerToken,
+    ApiJson(req): ApiJson<ClaimRequest>,
+) -> Result<Response, ApiError> {
+    let wait = Duration::from_secs_f64(req.wait_seconds.clamp(0.0, 3600.0)).min(st.cfg.claim_wait);
+    let deadline = tokio::time::Instant::now() + wait;
+    let mut shutdown = st.shutdown.clone();
+    loop {
+        if st.shutting_down() {
+            return Ok(StatusCode::NO_CONTENT.into_response());
+        }
+        let notified = st.queue_changed.notified();
+        if let Some(c) = st.store.claim(&req.worker_id, st.cfg.lease).await? {
+            let job = c.job;
+            let files = st.files.clone();
+            let (jid, fence, text) = (job.id.clone(), job.fence, job.scene.clone());
+            let scene: serde_json::Value = blocking(move || {
+                // The file records the scene when this version can read it; one it cannot
+                // still goes to the worker, which fails the job with the diagnosis.
+                // A file that cannot be created (a full disk) is given up, not the claim:
+                // the run's rows go to the database all the same.
+                let typed: Option<Scene> = serde_json::from_str(&text).ok();
+                let _ = files.start(&jid, fence, typed.as_ref());
+                serde_json::from_str(&text).map_err(ApiError::internal)
+            })
+            .await?;
+            tracing::info!(job = %job.id, worker = %req.worker_id, attempt = job.attempts, "claimed");
+            st.announce(&job);
+            return Ok(Json(Claim {
+                job_id: job.id,
+                fence: job.fence,
+                attempt: job.attempts,
+                scene,
+                lease_seconds: st.cfg.lease.as_secs_f64(),
+            })
+            .into_response());
+        }
+        let now = tokio::time::Instant::now();
+        if now >= deadline {
+            return Ok(StatusCode::NO_CONTENT.into_response());
+        }
+        // Poll at least every second in case a notification was missed.
+        let nap = (deadline - now).min(Duration::from_secs(1));
+        tokio::select! {
+            _ = notified => {}
+            _ = tokio::time::sleep(nap) => {}
+            _ = crate::server::until_shutdown(&mut shutdown) => {}
+        }
+    }
+}
+
+/// Extend the lease and report progress; the reply says whether to cancel.
+#[utoipa::path(post, path = "/api/v1/worker/jobs/{id}/heartbeat", tag = "worker",
+    params(("id" = String, Path, description = "Job id")),
+    request_body(content = Heartbeat, content_type = "application/json"),
+    responses((status = 200, description = "Whether to cancel, and the lease", body = HeartbeatReply),
+        (status = 401, description = "Missing or wrong worker token", body = ErrorBody),
+        (status = 409, description = "Stale fencing token: drop the job", body = ErrorBody)),
+    security(("bearer" = [])))]
+pub(super) async fn worker_heartbeat(
+    State(st): State<AppState>,
+    _: WorkerToken,
+    Path(id): Path<String>,
+    ApiJson(hb): ApiJson<Heartbeat>,
+) -> Result<Json<HeartbeatReply>, ApiError> {
+    let cancel = st
+        .store
+        .heartbeat(&id, hb.fence, st.cfg.lease, hb.progress.as_ref())
+        .await?;
+    if let Some(p) = hb.progress {
+        st.hub.send(&id, JobEvent::Progress(p));
+    }
+    Ok(Json(HeartbeatReply {
+        cancel,
+        lease_seconds: st.cfg.lease.as_secs_f64(),
+    }))
+}
+
+/// Append a record to the job's MCAP file (off the async threads). Called after the rows
+/// are committed: a failed file write gives the file up (`JobFiles::write`) but not the
+/// request, so the worker does not resend rows the database already holds.
+async fn write_file(st: &AppState, id: &str, fence: i64, rec: Record) -> Result<(), ApiError> {
+    let files = st.files.clone();
+    let id = id.to_string();
+    blocking(move || {
+        let _ = files.write(&id, fence, rec);
+        Ok(())
+    })
+    .await
+}
+
+/// Append energy rows.
+#[utoipa::path(post, path = "/api/v1/worker/jobs/{id}/energy", tag = "worker",
+    params(("id" = String, Path, description = "Job id")),
+    request_body(content = EnergyBatch, content_type = "application/json"),
+    responses((status = 204, description = "Stored"),
+        (status = 401, description = "Missing or wrong worker token", body = ErrorBody),
+        (status = 409, description = "Stale fencing token", body = ErrorBody)),
+    security(("bearer" = [])))]
+pub(super) async fn worker_energy(
+    State(st): State<AppState>,
+    _: WorkerToken,
+    Path(id): Path<String>,
+    ApiJson(b): ApiJson<EnergyBatch>,
+) -> Result<StatusCode, ApiError> {
+    let rows = b.rows;
+    st.store
+        .append_energy(&id, b.fence, st.cfg.lease, &rows)
+        .await?;
+    write_file(&st, &id, b.fence, Record::Energy(rows.clone())).await?;
+    st.hub.send(&id, JobEvent::Energy(rows));
+    Ok(StatusCode::NO_CONTENT)
+}
+
+/// Append crack-tip rows.
+#[utoipa::path(post, path = "/api/v1/worker/jobs/{id}/crack-tips", tag = "worker",
+    params(("id" = String, Path, description = "Job id")),
+    request_body(content = CrackTipBatch, content_type = "application/json"),
+    responses((status = 204, description = "Stored"),
+        (status = 401, description = "Missing or wrong worker token", body = ErrorBody),
+        (status = 409, description = "Stale fencing token", body = ErrorBody)),
+    security(("bearer" = [])))]
+pub(super) async fn worker_crack_tips(
+    State(st): State<AppState>,
+    _: WorkerToken,
+    Path(id): Path<String>,
+    ApiJson(b): ApiJson<CrackTipBatch>,
+) -> Result<StatusCode, ApiError> {
+    let rows = b.rows;
+    st.store
+        .append_crack_tips(&id, b.fence, st.cfg.lease, &rows)
+        .await?;
+    write_file(&st, &id, b.fence, Record::CrackTips(rows.clone())).await?;
+    st.hub.send(&id, JobEvent::CrackTips(rows));
+    Ok(StatusCode::NO_CONTENT)
+}
+
+/// Query of the snapshot upload.
+#[derive(Debug, Deserialize, utoipa::IntoParams)]
+#[serde(deny_unknown_fields)]
+pub(super) struct FenceQuery {
+    /// Fencing token of the claim.
+    fence: i64,
+}
+
+/// Upload a snapshot (binary body, see `codec`).
+#[utoipa::path(post, path = "/api/v1/worker/jobs/{id}/snapshots", tag = "worker",
+    params(("id" = String, Path, description = "Job id"), FenceQuery),
+    request_body(content = Vec<u8>, description = "Encoded snapshot", content_type = "application/octet-stream"),
+    responses((status = 204, description = "Stored"),
+        (status = 400, description = "Not a snapshot", body = ErrorBody),
+        (status = 401, description = "Missing or wrong worker token", body = ErrorBody),
+        (status = 409, description = "Stale fencing token", body = ErrorBody)),
+    security(("bearer" = [])))]
+pub(super) async fn worker_snapshot(
+    State(st): State<AppState>,
+    _: WorkerToken,
+    Path(id): Path<String>,
+    ApiQuery(q): ApiQuery<FenceQuery>,
+    RawBody(body): RawBody,
+) -> Result<StatusCode, ApiError> {
+    let (snap, body) = blocking(move || {
+        let snap =
+            codec::decode_snapshot(&body).map_err(|e| ApiError::BadRequest(e.to_string()))?;
+        Ok((snap, body))
+    })
+    .await?;
+    st.store
+        .put_snapshot(&id, q.fence, st.cfg.lease, &snap, &body)
+        .await?;
+    let info = SnapshotInfo {
+        index: snap.index,
+        time: snap.time,
+        fields: snap.fields.clone(),
+        components: snap.components.iter().map(|c| c.name.clone()).collect(),
+    };
+    write_file(&st, &id, q.fence, Record::Snapshot(Box::new(snap))).await?;
+    st.hub.send(&id, JobEvent::Snapshot(info));
+    Ok(StatusCode::NO_CONTENT)
+}
+
+/// Finish the run with its summary.
+#[utoipa::path(post, path = "/api/v1/worker/jobs/{id}/finish", tag = "worker",
+    params(("id" = String, Path, description = "Job id")),
+    request_body(content = FinishRequest, content_type = "application/json"),
+    responses((status = 200, description = "The job", body = JobInfo),
+        (status = 401, description = "Missing or wrong worker token", body = ErrorBody),
+        (status = 409, description = "Stale fencing token", body = ErrorBody)),
+    security(("bearer" = [])))]
+pub(super) async fn worker_finish(
+    State(st): State<AppState>,
+    _: WorkerToken,
+    Path(id): Path<String>,
+    ApiJson(f): ApiJson<FinishRequest>,
+) -> Result<Json<JobInfo>, ApiError> {
+    // Close the file first so a client that sees the final status gets a complete MCAP.
+    let current = job_or_404(&st, &id).await?;
+    if current.fence != f.fence || current.status != JobStatus::Running {
+        return Err(StoreError::Fenced.into());
+    }
+    let files = st.files.clone();
+    let id2 = id.clone();
+    blocking(move || {
+        // A file that cannot be finished is given up (`JobFiles::finish`); the run's record
+        // is the database.
+        let _ = files.finish(&id2);
+        Ok(())
+    })
+    .await?;
+    let row = st.store.finish(&id, f.fence, &f.summary).await?;
+    tracing::info!(job = %id, status = row.status.as_str(), "finished");
+    st.announce(&row);
+    st.queue_changed.notify_waiters();
+    Ok(Json(row.info(false)?))
+}

@@ -1,0 +1,287 @@
+//! Job rows: what a job is in the database, and the writes of the public API (create,
+//! cancel, delete) and its reads (one job, lists, counts).
+
+use std::collections::BTreeMap;
+
+use fracture_api::Scene;
+use fracture_api::jobs::{JobInfo, JobStatus, StatusEvent};
+use fracture_api::results::{Progress, Summary};
+use sqlx::sqlite::SqliteRow;
+use sqlx::{QueryBuilder, Sqlite};
+
+use super::{
+    Store, StoreError, col, col_u32, delete_job_rows, from_json, json_col, opt_json_col, to_json,
+};
+
+/// A job as stored, decoded.
+#[derive(Debug, Clone)]
+pub struct JobRow {
+    /// Insertion order (cursor of lists).
+    pub seq: i64,
+    /// Job id.
+    pub id: String,
+    /// Scene name.
+    pub name: String,
+    /// State.
+    pub status: JobStatus,
+    /// Priority (higher first).
+    pub priority: i64,
+    /// Labels.
+    pub labels: BTreeMap<String, String>,
+    /// Canonical scene JSON (decoded only where it is shown: [`JobRow::info`]).
+    pub scene: String,
+    /// Scene end time (s).
+    pub end_time: f64,
+    /// RFC 3339.
+    pub created_at: String,
+    /// RFC 3339.
+    pub started_at: Option<String>,
+    /// RFC 3339.
+    pub finished_at: Option<String>,
+    /// Claims counted against the attempt limit.
+    pub attempts: u32,
+    /// Fencing token.
+    pub fence: i64,
+    /// Worker holding the lease.
+    pub worker_id: Option<String>,
+    /// Lease end (ms since epoch).
+    pub lease_until_ms: Option<i64>,
+    /// Cancellation asked for while running.
+    pub cancel_requested: bool,
+    /// Latest progress.
+    pub progress: Option<Progress>,
+    /// The run summary once finished.
+    pub summary: Option<Summary>,
+    /// Why it failed or was cancelled.
+    pub message: Option<String>,
+    /// The sweep the job belongs to.
+    pub sweep_id: Option<String>,
+    /// Place of the job in its sweep (order of the combinations).
+    pub sweep_index: Option<u32>,
+    /// Label of the job's combination, e.g. `toughness=100`.
+    pub sweep_label: Option<String>,
+    /// The job's parameter values, `{"path": value}`.
+    pub sweep_values: Option<serde_json::Map<String, serde_json::Value>>,
+}
+
+impl JobRow {
+    /// Decode a `SELECT * FROM jobs` (or `RETURNING *`) row.
+    pub(super) fn decode(r: &SqliteRow) -> Result<JobRow, StoreError> {
+        let status: String = col(r, "status")?;
+        let status = JobStatus::parse(&status)
+            .ok_or_else(|| StoreError::Corrupt(format!("column `status`: unknown `{status}`")))?;
+        let sweep_index: Option<i64> = col(r, "sweep_index")?;
+        let sweep_index = sweep_index
+            .map(|i| {
+                u32::try_from(i).map_err(|_| {
+                    StoreError::Corrupt(format!("column `sweep_index`: {i} is not a u32"))
+                })
+            })
+            .transpose()?;
+        Ok(JobRow {
+            seq: col(r, "seq")?,
+            id: col(r, "id")?,
+            name: col(r, "name")?,
+            status,
+            priority: col(r, "priority")?,
+            labels: json_col(r, "labels")?,
+            scene: col(r, "scene")?,
+            end_time: col(r, "end_time")?,
+            created_at: col(r, "created_at")?,
+            started_at: col(r, "started_at")?,
+            finished_at: col(r, "finished_at")?,
+            attempts: col_u32(r, "attempts")?,
+            fence: col(r, "fence")?,
+            worker_id: col(r, "worker_id")?,
+            lease_until_ms: col(r, "lease_until_ms")?,
+            cancel_requested: col::<i64>(r, "cancel_requested")? != 0,
+            progress: opt_json_col(r, "progress")?,
+            summary: opt_json_col(r, "summary")?,
+            message: col(r, "message")?,
+            sweep_id: col(r, "sweep_id")?,
+            sweep_index,
+            sweep_label: col(r, "sweep_label")?,
+            sweep_values: opt_json_col(r, "sweep_values")?,
+        })
+    }
+
+    /// Decode many rows.
+    pub(super) fn decode_all(rows: &[SqliteRow]) -> Result<Vec<JobRow>, StoreError> {
+        rows.iter().map(JobRow::decode).collect()
+    }
+
+    /// The job as the API shows it; `with_scene` adds the scene document (decoded here:
+    /// a stored scene this version cannot read is [`StoreError::Corrupt`]).
+    pub fn info(&self, with_scene: bool) -> Result<JobInfo, StoreError> {
+        let scene: Option<Scene> = if with_scene {
+            Some(from_json("scene", &self.scene)?)
+        } else {
+            None
+        };
+        Ok(JobInfo {
+            id: self.id.clone(),
+            status: self.status,
+            name: self.name.clone(),
+            labels: self.labels.clone(),
+            priority: self.priority,
+            scene,
+            created_at: self.created_at.clone(),
+            started_at: self.started_at.clone(),
+            finished_at: self.finished_at.clone(),
+            attempts: self.attempts,
+            progress: self.progress,
+            summary: self.summary.clone(),
+            message: self.message.clone(),
+            sweep_id: self.sweep_id.clone(),
+        })
+    }
+
+    /// The `status` event of this job.
+    pub fn status_event(&self) -> StatusEvent {
+        StatusEvent {
+            id: self.id.clone(),
+            status: self.status,
+            attempts: self.attempts,
+            message: self.message.clone(),
+            summary: self.summary.clone(),
+        }
+    }
+}
+
+/// Filters of `GET /api/v1/jobs`.
+#[derive(Debug, Clone, Default)]
+pub struct ListFilter {
+    /// Only this status.
+    pub status: Option<JobStatus>,
+    /// Only jobs with this label `(key, value)`.
+    pub label: Option<(String, String)>,
+    /// Page size.
+    pub limit: i64,
+    /// Only jobs older than this sequence number.
+    pub before_seq: Option<i64>,
+}
+
+/// A new job.
+#[derive(Debug, Clone)]
+pub struct NewJob {
+    /// Job id.
+    pub id: String,
+    /// Scene name.
+    pub name: String,
+    /// Canonical scene JSON.
+    pub scene: String,
+    /// Scene end time.
+    pub end_time: f64,
+    /// Priority.
+    pub priority: i64,
+    /// Labels.
+    pub labels: BTreeMap<String, String>,
+}
+
+impl Store {
+    /// Insert a queued job.
+    pub async fn create_job(&self, j: &NewJob) -> Result<JobRow, StoreError> {
+        let mut tx = self.pool.begin().await?;
+        let row = sqlx::query(
+            "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at)
+             VALUES (?, ?, 'queued', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'))
+             RETURNING *",
+        )
+        .bind(&j.id)
+        .bind(&j.name)
+        .bind(j.priority)
+        .bind(to_json("labels", &j.labels)?)
+        .bind(&j.scene)
+        .bind(j.end_time)
+        .fetch_one(&mut *tx)
+        .await?;
+        tx.commit().await?;
+        JobRow::decode(&row)
+    }
+
+    /// One job.
+    pub async fn get(&self, id: &str) -> Result<Option<JobRow>, StoreError> {
+        sqlx::query("SELECT * FROM jobs WHERE id = ?")
+            .bind(id)
+            .fetch_optional(&self.pool)
+            .await?
+            .as_ref()
+            .map(JobRow::decode)
+            .transpose()
+    }
+
+    /// Jobs, newest first.
+    pub async fn list(&self, f: &ListFilter) -> Result<Vec<JobRow>, StoreError> {
+        let mut q: QueryBuilder<Sqlite> = QueryBuilder::new("SELECT * FROM jobs WHERE 1 = 1");
+        if let Some(s) = f.status {
+            q.push(" AND status = ").push_bind(s.as_str());
+        }
+        if let Some((k, v)) = &f.label {
+            q.push(" AND EXISTS (SELECT 1 FROM json_each(jobs.labels) WHERE json_each.key = ")
+                .push_bind(k.clone())
+                .push(" AND json_each.value = ")
+                .push_bind(v.clone())
+                .push(")");
+        }
+        if let Some(b) = f.before_seq {
+            q.push(" AND seq < ").push_bind(b);
+        }
+        q.push(" ORDER BY seq DESC LIMIT ").push_bind(f.limit);
+        JobRow::decode_all(&q.build().fetch_all(&self.pool).await?)
+    }
+
+    /// Number of queued and running jobs.
+    pub async fn counts(&self) -> Result<(u64, u64), StoreError> {
+        let row = sqlx::query(
+            "SELECT COALESCE(SUM(status = 'queued'), 0) AS q, COALESCE(SUM(status = 'running'), 0) AS r FROM jobs",
+        )
+        .fetch_one(&self.pool)
+        .await?;
+        let q: i64 = col(&row, "q")?;
+        let r: i64 = col(&row, "r")?;
+        Ok((q.max(0) as u64, r.max(0) as u64))
+    }
+
+    /// Number of jobs in the store.
+    pub async fn count_all(&self) -> Result<u64, StoreError> {
+        let n: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM jobs")
+            .fetch_one(&self.pool)
+            .await?;
+        Ok(n.max(0) as u64)
+    }
+
+    /// Cancel: a queued job ends at once; a running one is flagged for its worker.
+    /// Returns the job after the change, `None` if unknown.
+    pub async fn cancel(&self, id: &str) -> Result<Option<JobRow>, StoreError> {
+        sqlx::query(
+            "UPDATE jobs SET status = 'cancelled', message = 'cancelled before it started',
+                finished_at = strftime('%Y-%m-%dT%H:%M:%fZ','now')
+             WHERE id = ? AND status = 'queued'",
+        )
+        .bind(id)
+        .execute(&self.pool)
+        .await?;
+        sqlx::query("UPDATE jobs SET cancel_requested = 1 WHERE id = ? AND status = 'running'")
+            .bind(id)
+            .execute(&self.pool)
+            .await?;
+        self.get(id).await
+    }
+
+    /// Delete a finished job and its rows. Returns false if it is unknown or not finished.
+    pub async fn delete(&self, id: &str) -> Result<bool, StoreError> {
+        let mut tx = self.pool.begin().await?;
+        let n = sqlx::query(
+            "DELETE FROM jobs WHERE id = ? AND status IN ('completed', 'failed', 'cancelled')",
+        )
+        .bind(id)
+        .execute(&mut *tx)
+        .await?
+        .rows_affected();
+        if n == 1 {
+            delete_job_rows(&mut tx, id).await?;
+        }
+        tx.commit().await?;
+        Ok(n == 1)
+    }
+}

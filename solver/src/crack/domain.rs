@@ -1,0 +1,322 @@
+//! The equivalent domain integral for J and the interaction integral for K (`algorithm.md`
+//! §6; Li, Shih & Needleman 1985, Moran & Shih 1987; Yau, Wang & Corten 1980).
+//!
+//! Over a ring around the tip with the weight q = 1 for r ≤ R/2, falling smoothly to 0 at
+//! r = R (R a physical radius, so a finer grid puts more cells in the same ring), summed over
+//! the particles (dA = particle area, every particle with its own velocity field's values):
+//!
+//! J_k = Σ dA {[σ_ij ∂u_i/∂x_k − (W + ½ρ|u̇|²) δ_jk] ∂q/∂x_j + ρ[ü_i ∂u_i/∂x_k − u̇_i ∂u̇_i/∂x_k] q}
+//!       − Σ_faces q t_i ∂u_i/∂x_k ds,
+//!
+//! the last term over the two-field nodes where the crack faces carry a contact force (the
+//! force-stage contact force of each side, with that side's nodal ∂u/∂x); ü and ∂u̇/∂x come
+//! from the particle's own field's nodes (f/m and the re-extrapolated q/m).
+//!
+//! The interaction integral with the auxiliary Williams fields of unit K in the tip frame
+//! (x1 ahead), M = Σ dA {[σ_ij ∂u^a_i/∂x1 + σ^a_ij ∂u_i/∂x1 − σ^a_ij ε_ij δ_1j] ∂q/∂x_j +
+//! ρ ü_i ∂u^a_i/∂x1 q}, gives K = E'·M/2 for each mode.
+//!
+//! A ring that leaves the grid or the material (a point of its outer circle on a node
+//! without mass) gives NaN: the result is flagged, never a silent 0.
+
+use std::collections::BTreeMap;
+
+use crate::grid::STRIP;
+use crate::shape::Weights2;
+use crate::tip_mechanics::{Mode, TipMedium, williams, williams_du_dx1};
+
+use super::{Cracks, View};
+
+/// What one pass over the particles around a tip gives.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct DomainResult {
+    /// J (global x, y) for each requested radius; NaN where the ring is not inside the body.
+    pub(super) j: [[f64; 2]; 3],
+    /// (K_I, K_II) from the interaction integral at the first radius; NaN if not defined.
+    pub(super) k: [f64; 2],
+}
+
+/// The ring weight q(r) and dq/dr for an outer radius `big_r`: q = 1 inside R/2, then the
+/// smooth step q = 1 − 3s² + 2s³, s = (r − R/2)/(R/2), to 0 at R. Its gradient is continuous
+/// (0 at both edges of the ring), so the particle sum, a point quadrature with a few particles
+/// across the ring, does not see a jump of ∂q at the ring's edges.
+#[inline]
+fn ring(r: f64, big_r: f64) -> (f64, f64) {
+    let r_in = 0.5 * big_r;
+    if r <= r_in {
+        (1.0, 0.0)
+    } else if r < big_r {
+        let w = big_r - r_in;
+        let s = (r - r_in) / w;
+        (1.0 - s * s * (3.0 - 2.0 * s), -6.0 * s * (1.0 - s) / w)
+    } else {
+        (0.0, 0.0)
+    }
+}
+
+/// Face-term accumulator of one two-field node: Σ S m ∂u/∂x and Σ S m per field.
+#[derive(Debug, Clone, Copy, Default)]
+struct FaceNode {
+    gu: [[f64; 4]; 2],
+    m: [f64; 2],
+}
+
+impl Cracks {
+    /// Domain J at `radii` and the interaction-integral K at `radii[0]` for tip `t` of crack
+    /// `ci`, with the tip frame e1 (ahead) of that tip.
+    pub(super) fn domain_integrals(
+        &self,
+        ci: usize,
+        t: usize,
+        v: &View<'_>,
+        radii: [f64; 3],
+        medium: &TipMedium,
+    ) -> DomainResult {
+        let g = v.geom;
+        let h = g.h;
+        let c = &self.cracks[ci];
+        let (tip, e1) = c.tip_frame(t);
+        let e2 = [-e1[1], e1[0]];
+        let r_max = radii.iter().fold(0.0_f64, |a, &b| a.max(b));
+        let nan = [f64::NAN; 2];
+
+        // Which rings lie inside the grid and the material: 32 points of each outer circle,
+        // each must fall within the grid and next to a node that carries mass in some field.
+        let mut ok = [true; 3];
+        for (k, &r) in radii.iter().enumerate() {
+            if !(r.is_finite() && r > 0.0) {
+                ok[k] = false;
+                continue;
+            }
+            for i in 0..32 {
+                let a = i as f64 * std::f64::consts::PI / 16.0;
+                let x = [tip[0] + r * a.cos(), tip[1] + r * a.sin()];
+                let xi = g.xi(x);
+                let (ix, iy) = (xi[0].round(), xi[1].round());
+                if ix < 1.0 || iy < 1.0 || ix + 1.0 >= g.nx as f64 || iy + 1.0 >= g.ny as f64 {
+                    ok[k] = false;
+                    break;
+                }
+                let (ix, iy) = (ix as usize, iy as usize);
+                let has_mass = v.node(ix, iy, 0).is_some_and(|n| n.m > 0.0)
+                    || v.node(ix, iy, 1).is_some_and(|n| n.m > 0.0);
+                if !has_mass {
+                    ok[k] = false;
+                    break;
+                }
+            }
+        }
+        if !ok.iter().any(|&o| o) {
+            return DomainResult {
+                j: [nan; 3],
+                k: nan,
+            };
+        }
+
+        let p = v.parts;
+        let xi_tip = g.xi(tip);
+        let reach = r_max / h + 3.0;
+        let s_lo = ((xi_tip[0] - reach).max(0.0) as usize) / STRIP;
+        let s_hi = (((xi_tip[0] + reach).max(0.0) as usize) / STRIP).min(g.strips - 1);
+        let range = v.strip_bounds[s_lo]..v.strip_bounds[s_hi + 1];
+        let has_mask = !p.fmask.is_empty();
+        let faces = !self.face_force.is_empty();
+        let mut face_nodes: BTreeMap<u32, (usize, FaceNode)> = BTreeMap::new();
+
+        let mut j = [[0.0_f64; 2]; 3];
+        let mut m_int = [0.0_f64; 2];
+        for i in range {
+            let k = p.kin[i];
+            let d = [k.x[0] - tip[0], k.x[1] - tip[1]];
+            let r = d[0].hypot(d[1]);
+            // Particles up to 2h beyond the ring feed the face term's nodal gradients.
+            if r >= r_max + 2.0 * h || r <= 0.0 {
+                continue;
+            }
+            let m = p.mech[i];
+            let s = p.stress[i];
+            let gu = p.grad_u[i];
+            let pxi = g.xi(k.x);
+            let w = Weights2::new(v.shape, pxi, m.lh);
+            let mask = if has_mask { p.fmask[i] } else { 0 };
+            // Own-field nodal acceleration and velocity gradient (∂u̇_i/∂x_k).
+            let mut acc = [0.0; 2];
+            let mut gv = [[0.0; 2]; 2];
+            for a in 0..3 {
+                for b in 0..3 {
+                    let sh = w.s(a, b);
+                    let gr = w.g(a, b);
+                    if sh == 0.0 && gr[0] == 0.0 && gr[1] == 0.0 {
+                        continue;
+                    }
+                    let ix = (w.x.base + a as i32) as usize;
+                    let iy = (w.y.base + b as i32) as usize;
+                    let field = ((mask >> (3 * a + b)) & 1) as u8;
+                    if let Some(nd) = v.node(ix, iy, field)
+                        && nd.m > 0.0
+                    {
+                        for q in 0..2 {
+                            acc[q] += sh * nd.f[q] / nd.m;
+                            let vel = nd.q[q] / nd.m;
+                            gv[q][0] += vel * gr[0] / h;
+                            gv[q][1] += vel * gr[1] / h;
+                        }
+                    }
+                    if faces && sh > 0.0 {
+                        let idx = g.index(ix, iy);
+                        if let Some(&slot) = v.slot_of.get(idx)
+                            && slot != u32::MAX
+                            && self
+                                .face_force
+                                .get(slot as usize)
+                                .is_some_and(|f| f[0] != 0.0 || f[1] != 0.0)
+                        {
+                            let e = face_nodes.entry(slot).or_insert((idx, FaceNode::default()));
+                            let f = field as usize;
+                            e.1.m[f] += sh * m.m;
+                            for q in 0..4 {
+                                e.1.gu[f][q] += sh * m.m * gu[q];
+                            }
+                        }
+                    }
+                }
+            }
+            if r >= r_max {
+                continue;
+            }
+            let rho = m.m / m.vol;
+            let da = m.vol / self.thickness;
+            let ke = 0.5 * rho * (k.v[0] * k.v[0] + k.v[1] * k.v[1]);
+            let wke = m.w + ke;
+            let sig = [[s[0], s[2]], [s[2], s[1]]];
+            // ∂u_i/∂x_k = gu[2i + k].
+            let gmat = [[gu[0], gu[1]], [gu[2], gu[3]]];
+            let dir = [d[0] / r, d[1] / r];
+            for (kr, &big_r) in radii.iter().enumerate() {
+                if !ok[kr] {
+                    continue;
+                }
+                let (q, dq_dr) = ring(r, big_r);
+                if q == 0.0 && dq_dr == 0.0 {
+                    continue;
+                }
+                let dq = [dq_dr * dir[0], dq_dr * dir[1]];
+                for kk in 0..2 {
+                    let mut term = 0.0;
+                    for jj in 0..2 {
+                        let mut sg = 0.0;
+                        for ii in 0..2 {
+                            sg += sig[ii][jj] * gmat[ii][kk];
+                        }
+                        if jj == kk {
+                            sg -= wke;
+                        }
+                        term += sg * dq[jj];
+                    }
+                    let inertial = rho
+                        * (acc[0] * gmat[0][kk] + acc[1] * gmat[1][kk]
+                            - k.v[0] * gv[0][kk]
+                            - k.v[1] * gv[1][kk]);
+                    j[kr][kk] += da * (term + inertial * q);
+                }
+                if kr == 0 {
+                    // Interaction integral in the tip frame.
+                    let rot =
+                        |a: [f64; 2]| [a[0] * e1[0] + a[1] * e1[1], a[0] * e2[0] + a[1] * e2[1]];
+                    let xl = rot(d);
+                    let dql = rot(dq);
+                    let al = rot(acc);
+                    // σ' = R σ Rᵀ and G' = R G Rᵀ with R's rows e1, e2.
+                    let rm = [e1, e2];
+                    let mut sl = [[0.0; 2]; 2];
+                    let mut gl = [[0.0; 2]; 2];
+                    for a in 0..2 {
+                        for b in 0..2 {
+                            for c1 in 0..2 {
+                                for c2 in 0..2 {
+                                    sl[a][b] += rm[a][c1] * sig[c1][c2] * rm[b][c2];
+                                    gl[a][b] += rm[a][c1] * gmat[c1][c2] * rm[b][c2];
+                                }
+                            }
+                        }
+                    }
+                    let eps = [gl[0][0], gl[1][1], 0.5 * (gl[0][1] + gl[1][0])];
+                    let th = xl[1].atan2(xl[0]);
+                    for (mi, mode) in [Mode::I, Mode::II].into_iter().enumerate() {
+                        let (_, sa) = williams(mode, r, th, medium);
+                        let du = williams_du_dx1(mode, xl, medium);
+                        let sa_m = [[sa[0], sa[2]], [sa[2], sa[1]]];
+                        let w12 = sa[0] * eps[0] + sa[1] * eps[1] + 2.0 * sa[2] * eps[2];
+                        let mut term = 0.0;
+                        for jj in 0..2 {
+                            let mut v_j = 0.0;
+                            for ii in 0..2 {
+                                v_j += sl[ii][jj] * du[ii] + sa_m[ii][jj] * gl[ii][0];
+                            }
+                            if jj == 0 {
+                                v_j -= w12;
+                            }
+                            term += v_j * dql[jj];
+                        }
+                        let inertial = rho * (al[0] * du[0] + al[1] * du[1]);
+                        m_int[mi] += da * (term + inertial * q);
+                    }
+                }
+            }
+        }
+
+        // Crack-face traction term −Σ q t_i ∂u_i/∂x_k ds: the contact force on each side's
+        // material (per the scene's thickness) with that side's nodal ∂u/∂x.
+        for (slot, (idx, fnode)) in &face_nodes {
+            let (ix, iy) = g.node_of(*idx);
+            let x = g.node_pos(ix, iy);
+            let r = (x[0] - tip[0]).hypot(x[1] - tip[1]);
+            let Some(info) = self.slots.get(*slot as usize) else {
+                continue;
+            };
+            let f_above = self.face_force[*slot as usize];
+            let above = usize::from(info.above_is_f1);
+            for side in 0..2 {
+                if fnode.m[side] <= 0.0 {
+                    continue;
+                }
+                let f = if side == above {
+                    f_above
+                } else {
+                    [-f_above[0], -f_above[1]]
+                };
+                let gsum = fnode.gu[side];
+                let gm = |q: usize| gsum[q] / fnode.m[side];
+                for (kr, &big_r) in radii.iter().enumerate() {
+                    if !ok[kr] {
+                        continue;
+                    }
+                    let (q, _) = ring(r, big_r);
+                    if q == 0.0 {
+                        continue;
+                    }
+                    for kk in 0..2 {
+                        j[kr][kk] -= q * (f[0] * gm(kk) + f[1] * gm(2 + kk)) / self.thickness;
+                    }
+                }
+            }
+        }
+
+        let mut out = DomainResult {
+            j: [nan; 3],
+            k: nan,
+        };
+        for kr in 0..3 {
+            if ok[kr] {
+                out.j[kr] = j[kr];
+            }
+        }
+        if ok[0] {
+            out.k = [
+                0.5 * medium.e_prime * m_int[0],
+                0.5 * medium.e_prime * m_int[1],
+            ];
+        }
+        out
+    }
+}

@@ -1,0 +1,183 @@
+//! Velocity fields per node (`algorithm.md` §3, CRAMP): each particle's field mask (which of
+//! its nodes it reaches across a crack), and the sorted field-1 node table with a
+//! [`SlotInfo`] per node (side, contact normal, crack).
+
+use fracture_api::scene::ShapeFunction;
+
+use rayon::prelude::*;
+
+use crate::grid::GridGeom;
+use crate::particles::{Kin, Mech};
+use crate::shape::Weights2;
+
+use super::Cracks;
+use super::geometry::{crosses, left, norm, seg_normal};
+
+/// A field-1 pair found by the crossing test: storage index of the node, crack, side of the
+/// particle (+1 above, −1 below), normal of the crossed segment.
+pub(super) type FieldEntry = (u32, u32, i32, [f64; 2]);
+
+/// Entries of one chunk of the parallel mask pass and its first error (node, fields needed).
+pub(super) type ChunkEntries = (Vec<FieldEntry>, Option<(usize, u32)>);
+
+/// Field-1 node record: which side field 1 holds, the contact normal, the crack.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct SlotInfo {
+    /// Field 1 holds the particles above (left of) the crack.
+    pub above_is_f1: bool,
+    /// Unit normal from above to below.
+    pub normal: [f64; 2],
+    /// Crack index.
+    pub crack: u32,
+}
+
+impl Cracks {
+    /// Field masks of the particles `kin`/`mech` into `fmask`, and the field-1 entries
+    /// (node, crack, side vote, crossed-segment normal) in particle order.
+    fn masks(
+        &self,
+        geom: &GridGeom,
+        shape: ShapeFunction,
+        kin: &[Kin],
+        mech: &[Mech],
+        fmask: &mut [u16],
+        entries: &mut Vec<FieldEntry>,
+    ) -> Result<(), (usize, u32)> {
+        for (i, (k, m)) in kin.iter().zip(mech).enumerate() {
+            let segs = self.segs_near(geom, k.x);
+            if segs.is_empty() {
+                fmask[i] = 0;
+                continue;
+            }
+            let w = Weights2::new(shape, geom.xi(k.x), m.lh);
+            let mut mask = 0u16;
+            for a in 0..3 {
+                if w.x.s[a] == 0.0 && w.x.ds[a] == 0.0 {
+                    continue;
+                }
+                for b in 0..3 {
+                    if w.y.s[b] == 0.0 && w.y.ds[b] == 0.0 {
+                        continue;
+                    }
+                    let ix = (w.x.base + a as i32) as usize;
+                    let iy = (w.y.base + b as i32) as usize;
+                    let node = geom.node_pos(ix, iy);
+                    // Parity of crossings per crack; side and normal of the last crossing.
+                    let mut hit: Option<(u32, u32, bool, [f64; 2])> = None;
+                    let mut other_crack = false;
+                    for &(ci, si) in segs {
+                        let c = &self.cracks[ci as usize];
+                        let (pa, pb) = (c.pts[si as usize].x, c.pts[si as usize + 1].x);
+                        if crosses(k.x, node, pa, pb) {
+                            match &mut hit {
+                                None => hit = Some((ci, 1, left(pa, pb, k.x), seg_normal(pa, pb))),
+                                Some(h) if h.0 == ci => {
+                                    h.1 += 1;
+                                    h.2 = left(pa, pb, k.x);
+                                    h.3 = seg_normal(pa, pb);
+                                }
+                                Some(_) => other_crack = true,
+                            }
+                        }
+                    }
+                    if let Some((ci, count, above, n)) = hit
+                        && count % 2 == 1
+                    {
+                        if other_crack {
+                            return Err((geom.index(ix, iy), 3));
+                        }
+                        mask |= 1 << (3 * a + b);
+                        entries.push((
+                            geom.index(ix, iy) as u32,
+                            ci,
+                            if above { 1 } else { -1 },
+                            n,
+                        ));
+                    }
+                }
+            }
+            fmask[i] = mask;
+        }
+        Ok(())
+    }
+
+    /// Assign the velocity field of every particle–node pair (§3); fills `f1_index` with the
+    /// sorted storage indices of nodes needing field 1 and `self.slots` with their records.
+    /// Err((node, fields)) when a node would need more than two fields.
+    pub fn assign_fields(
+        &mut self,
+        geom: &GridGeom,
+        shape: ShapeFunction,
+        kin: &[Kin],
+        mech: &[Mech],
+        fmask: &mut [u16],
+        f1_index: &mut Vec<u32>,
+    ) -> Result<(), (usize, u32)> {
+        self.build_broad_phase(geom);
+        // Masks and field-1 entries per chunk of particles, in parallel; the chunks' entries
+        // are concatenated in particle order, so the result is the same for any thread count.
+        const CHUNK: usize = 4096;
+        let mut chunks = std::mem::take(&mut self.chunk_entries);
+        chunks.resize_with(kin.len().div_ceil(CHUNK), Default::default);
+        let this = &*self;
+        fmask
+            .par_chunks_mut(CHUNK)
+            .zip(kin.par_chunks(CHUNK))
+            .zip(mech.par_chunks(CHUNK))
+            .zip(chunks.par_iter_mut())
+            .for_each(|(((fm, kn), me), (entries, err))| {
+                entries.clear();
+                *err = None;
+                if let Err(e) = this.masks(geom, shape, kn, me, fm, entries) {
+                    *err = Some(e);
+                }
+            });
+        let mut entries = std::mem::take(&mut self.entries);
+        entries.clear();
+        let mut first_error = None;
+        for (chunk, err) in &chunks {
+            if let Some(e) = err {
+                first_error = Some(*e);
+                break;
+            }
+            entries.extend_from_slice(chunk);
+        }
+        self.chunk_entries = chunks;
+        if let Some(e) = first_error {
+            self.entries = entries;
+            return Err(e);
+        }
+        entries.sort_unstable_by_key(|e| (e.0, e.1));
+        f1_index.clear();
+        self.slots.clear();
+        let mut i = 0;
+        while i < entries.len() {
+            let node = entries[i].0;
+            let crack = entries[i].1;
+            let mut votes = 0i64;
+            let mut n = [0.0; 2];
+            while i < entries.len() && entries[i].0 == node {
+                if entries[i].1 != crack {
+                    return Err((node as usize, 3));
+                }
+                votes += entries[i].2 as i64;
+                n[0] += entries[i].3[0];
+                n[1] += entries[i].3[1];
+                i += 1;
+            }
+            let l = norm(n);
+            f1_index.push(node);
+            self.slots.push(SlotInfo {
+                above_is_f1: votes >= 0,
+                normal: if l > 0.0 {
+                    [n[0] / l, n[1] / l]
+                } else {
+                    [0.0, -1.0]
+                },
+                crack,
+            });
+        }
+        self.entries = entries;
+        Ok(())
+    }
+}

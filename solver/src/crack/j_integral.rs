@@ -1,0 +1,445 @@
+//! J-integral and stress intensity factors at each tip (`algorithm.md` §6; Guo & Nairn 2004):
+//! the crack's J method (the domain integral of `domain.rs`, or the seed's contour with its
+//! area term), the path-independence report (domain J at half and twice the radius), K_I and
+//! K_II from the interaction integral for a tip at rest and from E'·J1 with Freund's A(v) and
+//! the A-corrected opening ratio for a moving one (null at and above c_R), all cached per
+//! sample time and rotated into the tip frame; the crack-tip rows.
+
+use fracture_api::results::CrackTipRow;
+
+use fracture_api::scene::JIntegral;
+
+use crate::grid::STRIP;
+use crate::shape::Weights2;
+use crate::tip_mechanics::TipMedium;
+
+use super::geometry::{cross_param, crosses, dist, sub};
+use super::{Cracks, View};
+
+/// One edge of the J contour: from node, to node, outward normal.
+type ContourEdge = ((usize, usize), (usize, usize), [f64; 2]);
+
+/// J of one contour evaluation (global components).
+#[derive(Debug, Clone, Copy, Default)]
+struct TipJ {
+    j: [f64; 2],
+}
+
+/// What one evaluation at a tip gives (global components), cached per sample time.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct TipEval {
+    /// J by the crack's method; NaN where not defined.
+    j: [f64; 2],
+    /// Domain J at half and twice the radius (the path-independence report).
+    j_half: [f64; 2],
+    j_double: [f64; 2],
+    /// (K_I, K_II) of the interaction integral.
+    k_int: [f64; 2],
+}
+
+/// J of a tip in its own frame (e1 ahead along the crack, e2 to its left), with K.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct TipFrameJ {
+    pub(super) tip: [f64; 2],
+    pub(super) e1: [f64; 2],
+    pub(super) e2: [f64; 2],
+    pub(super) j1: f64,
+    pub(super) j2: f64,
+    /// (J1, J2) of the domain at half and twice the radius.
+    pub(super) j_half: [f64; 2],
+    pub(super) j_double: [f64; 2],
+    /// (K_I, K_II) of the interaction integral.
+    pub(super) k_int: [f64; 2],
+}
+
+impl Cracks {
+    /// Dynamic J (global components) at tip `t` of crack `ci`: contour plus area term.
+    fn compute_j(&self, ci: usize, t: usize, v: &View<'_>) -> TipJ {
+        let g = v.geom;
+        let h = g.h;
+        let c = &self.cracks[ci];
+        let (tip, _) = c.tip_frame(t);
+        let n = match c.j_method {
+            JIntegral::Contour { cells } => i64::from(cells.max(1)),
+            JIntegral::Domain { radius } => (radius / h).round().max(1.0) as i64,
+        };
+        let xi = g.xi(tip);
+        let (c0, r0) = (xi[0].round() as i64, xi[1].round() as i64);
+        // Window of nodes around the contour.
+        let (wx0, wy0) = (c0 - n - 1, r0 - n - 1);
+        let wn = (2 * n + 3) as usize;
+        if wx0 < 0 || wy0 < 0 || wx0 as usize + wn > g.nx || wy0 as usize + wn > g.ny {
+            // The contour leaves the grid: J is not defined (null in the output), never 0.
+            return TipJ { j: [f64::NAN; 2] };
+        }
+        let (wx0, wy0) = (wx0 as usize, wy0 as usize);
+        const NV: usize = 9;
+        let mut mass = vec![0.0f64; wn * wn];
+        let mut vals = vec![0.0f64; wn * wn * NV];
+        let mut area = [0.0f64; 2];
+        let box_lo = [(c0 - n) as f64, (r0 - n) as f64];
+        let box_hi = [(c0 + n) as f64, (r0 + n) as f64];
+        let p = v.parts;
+        let s_lo = ((wx0 as i64 - 5).max(0) as usize) / STRIP;
+        let s_hi = ((wx0 + wn + 5) / STRIP).min(g.strips - 1);
+        let range = v.strip_bounds[s_lo]..v.strip_bounds[s_hi + 1];
+        let has_mask = !p.fmask.is_empty();
+        for i in range {
+            let k = p.kin[i];
+            let pxi = g.xi(k.x);
+            if pxi[0] < wx0 as f64 - 2.0
+                || pxi[1] < wy0 as f64 - 2.0
+                || pxi[0] > (wx0 + wn) as f64 + 1.0
+                || pxi[1] > (wy0 + wn) as f64 + 1.0
+            {
+                continue;
+            }
+            let m = p.mech[i];
+            let s = p.stress[i];
+            let gu = p.grad_u[i];
+            let rho = m.m / m.vol;
+            let ke = 0.5 * rho * (k.v[0] * k.v[0] + k.v[1] * k.v[1]);
+            let pv = [s[0], s[1], s[2], gu[0], gu[1], gu[2], gu[3], m.w, ke];
+            let w = Weights2::new(v.shape, pxi, m.lh);
+            let mask = if has_mask { p.fmask[i] } else { 0 };
+            let inside = pxi[0] > box_lo[0]
+                && pxi[0] < box_hi[0]
+                && pxi[1] > box_lo[1]
+                && pxi[1] < box_hi[1];
+            let mut acc = [0.0; 2];
+            let mut gv = [[0.0; 2]; 2];
+            for a in 0..3 {
+                for b in 0..3 {
+                    let sh = w.s(a, b);
+                    let gr = w.g(a, b);
+                    if sh == 0.0 && gr[0] == 0.0 && gr[1] == 0.0 {
+                        continue;
+                    }
+                    let ix = (w.x.base + a as i32) as usize;
+                    let iy = (w.y.base + b as i32) as usize;
+                    let field = ((mask >> (3 * a + b)) & 1) as u8;
+                    if field == 0
+                        && ix >= wx0
+                        && iy >= wy0
+                        && ix < wx0 + wn
+                        && iy < wy0 + wn
+                        && sh > 0.0
+                    {
+                        let wk = (ix - wx0) * wn + (iy - wy0);
+                        mass[wk] += sh * m.m;
+                        for q in 0..NV {
+                            vals[wk * NV + q] += sh * m.m * pv[q];
+                        }
+                    }
+                    if inside
+                        && let Some(nd) = v.node(ix, iy, field)
+                        && nd.m > 0.0
+                    {
+                        for r in 0..2 {
+                            acc[r] += sh * nd.f[r] / nd.m;
+                            let vel = nd.q[r] / nd.m;
+                            gv[r][0] += vel * gr[0] / h;
+                            gv[r][1] += vel * gr[1] / h;
+                        }
+                    }
+                }
+            }
+            if inside {
+                // ∫_A ρ [ü_i ∂u_i/∂x_k − u̇_i ∂u̇_i/∂x_k] dA, per unit thickness.
+                let da = m.vol / self.thickness * rho;
+                for kk in 0..2 {
+                    area[kk] += da
+                        * (acc[0] * gu[kk] + acc[1] * gu[2 + kk]
+                            - k.v[0] * gv[0][kk]
+                            - k.v[1] * gv[1][kk]);
+                }
+            }
+        }
+        // Contour integrand at a window node with outward normal nrm.
+        let integrand = |ix: usize, iy: usize, nrm: [f64; 2]| -> [f64; 2] {
+            let wk = (ix - wx0) * wn + (iy - wy0);
+            let m = mass[wk];
+            if m <= 0.0 {
+                return [0.0; 2];
+            }
+            let q = |k: usize| vals[wk * NV + k] / m;
+            let (sxx, syy, sxy) = (q(0), q(1), q(2));
+            let gu = [q(3), q(4), q(5), q(6)];
+            let e = q(7) + q(8);
+            let tr = [sxx * nrm[0] + sxy * nrm[1], sxy * nrm[0] + syy * nrm[1]];
+            [
+                e * nrm[0] - (tr[0] * gu[0] + tr[1] * gu[2]),
+                e * nrm[1] - (tr[0] * gu[1] + tr[1] * gu[3]),
+            ]
+        };
+        // Walk the square counter-clockwise: bottom, right, top, left edges.
+        let (cx0, cx1) = ((c0 - n) as usize, (c0 + n) as usize);
+        let (cy0, cy1) = ((r0 - n) as usize, (r0 + n) as usize);
+        let mut edges: Vec<ContourEdge> = Vec::new();
+        for ix in cx0..cx1 {
+            edges.push(((ix, cy0), (ix + 1, cy0), [0.0, -1.0]));
+        }
+        for iy in cy0..cy1 {
+            edges.push(((cx1, iy), (cx1, iy + 1), [1.0, 0.0]));
+        }
+        for ix in (cx0 + 1..=cx1).rev() {
+            edges.push(((ix, cy1), (ix - 1, cy1), [0.0, 1.0]));
+        }
+        for iy in (cy0 + 1..=cy1).rev() {
+            edges.push(((cx0, iy), (cx0, iy - 1), [-1.0, 0.0]));
+        }
+        let mut j = area;
+        for (pn, qn, nrm) in edges {
+            let (pp, qp) = (g.node_pos(pn.0, pn.1), g.node_pos(qn.0, qn.1));
+            let fp = integrand(pn.0, pn.1, nrm);
+            let fq = integrand(qn.0, qn.1, nrm);
+            let cut = c
+                .pts
+                .windows(2)
+                .find(|w| crosses(pp, qp, w[0].x, w[1].x))
+                .map(|w| cross_param(pp, qp, w[0].x, w[1].x));
+            for r in 0..2 {
+                j[r] += match cut {
+                    // Each face of the crack uses its own side's values up to the crossing.
+                    Some(tc) => h * (tc * fp[r] + (1.0 - tc) * fq[r]),
+                    None => 0.5 * h * (fp[r] + fq[r]),
+                };
+            }
+        }
+        TipJ { j }
+    }
+
+    /// The tip's medium (its nearest material in the scene's 2D state).
+    pub(super) fn medium(&self, v: &View<'_>, x: [f64; 2]) -> TipMedium {
+        self.media[self.nearest_material(v, x)]
+    }
+
+    /// Evaluate tip `t` of crack `ci` now (uncached).
+    fn evaluate(&self, ci: usize, t: usize, v: &View<'_>) -> TipEval {
+        let (tip, _) = self.cracks[ci].tip_frame(t);
+        let medium = self.medium(v, tip);
+        let h = self.h;
+        let (radii, contour): (&[f64], _) = match self.cracks[ci].j_method {
+            JIntegral::Domain { radius } => (&[radius], None),
+            // The contour's K and path-independence report come from the domain integral at
+            // the default radius, or the largest smaller ring (down to two cells) that fits in
+            // the material (its own J stays the contour's).
+            JIntegral::Contour { .. } => (
+                &[
+                    JIntegral::DEFAULT_RADIUS_CELLS * h,
+                    4.0 * h,
+                    3.0 * h,
+                    2.0 * h,
+                ],
+                Some(()),
+            ),
+        };
+        let mut d = None;
+        for &r in radii {
+            let dr = self.domain_integrals(ci, t, v, [r, 0.5 * r, 2.0 * r], &medium);
+            let fits = dr.k[0].is_finite();
+            d = Some(dr);
+            if fits {
+                break;
+            }
+        }
+        let nan = [f64::NAN; 2];
+        let d = d.unwrap_or(super::domain::DomainResult {
+            j: [nan; 3],
+            k: nan,
+        });
+        let j = match contour {
+            Some(()) => self.compute_j(ci, t, v).j,
+            None => d.j[0],
+        };
+        TipEval {
+            j,
+            j_half: d.j[1],
+            j_double: d.j[2],
+            k_int: d.k,
+        }
+    }
+
+    fn tip_eval(&mut self, ci: usize, t: usize, v: &View<'_>, time: f64) -> TipEval {
+        if let Some((tc, e)) = self.cracks[ci].tips[t].cached_j
+            && tc == time
+        {
+            return e;
+        }
+        let e = self.evaluate(ci, t, v);
+        self.j_evaluations += 1;
+        self.cracks[ci].tips[t].cached_j = Some((time, e));
+        e
+    }
+
+    /// J and K at tip `t` of crack `ci` in the tip frame.
+    pub(super) fn tip_frame_j(
+        &mut self,
+        ci: usize,
+        t: usize,
+        v: &View<'_>,
+        time: f64,
+    ) -> TipFrameJ {
+        let e = self.tip_eval(ci, t, v, time);
+        let (tip, e1) = self.cracks[ci].tip_frame(t);
+        let e2 = [-e1[1], e1[0]];
+        let frame = |j: [f64; 2]| [j[0] * e1[0] + j[1] * e1[1], j[0] * e2[0] + j[1] * e2[1]];
+        let [j1, j2] = frame(e.j);
+        TipFrameJ {
+            tip,
+            e1,
+            e2,
+            j1,
+            j2,
+            j_half: frame(e.j_half),
+            j_double: frame(e.j_double),
+            k_int: e.k_int,
+        }
+    }
+}
+
+// K (§6) from J and the crack opening, and the crack-tip rows.
+impl Cracks {
+    /// Opening (δ_n, δ_t) in the tip frame, about 2h behind tip `t`: left face − right face.
+    fn tip_opening(&self, ci: usize, t: usize) -> [f64; 2] {
+        let c = &self.cracks[ci];
+        let (_, e1) = c.tip_frame(t);
+        let e2 = [-e1[1], e1[0]];
+        let n = c.pts.len();
+        let order: Box<dyn Iterator<Item = usize>> = if t == 0 {
+            Box::new(0..n)
+        } else {
+            Box::new((0..n).rev())
+        };
+        let mut prev: Option<[f64; 2]> = None;
+        let mut s = 0.0;
+        let mut at = if t == 0 { n - 1 } else { 0 };
+        for k in order {
+            if let Some(p) = prev {
+                s += dist(p, c.pts[k].x);
+            }
+            prev = Some(c.pts[k].x);
+            if s >= 2.0 * self.h {
+                at = k;
+                break;
+            }
+        }
+        let p = c.pts[at];
+        let cod = if t == 1 {
+            sub(p.above, p.below)
+        } else {
+            sub(p.below, p.above)
+        };
+        [
+            cod[0] * e2[0] + cod[1] * e2[1],
+            cod[0] * e1[0] + cod[1] * e1[1],
+        ]
+    }
+
+    /// K by the crack-opening ratio (the seed's and NairnMPM's method, kept for comparison):
+    /// |K| from E'·J1 = A_I K_I² + A_II K_II², the mode ratio from the opening (δ_n, δ_t) about
+    /// 2h behind the tip, which for a moving tip scales as (A_I K_I, A_II K_II) (Freund);
+    /// NaN at and above c_R.
+    pub(super) fn cod_k(
+        &self,
+        ci: usize,
+        t: usize,
+        j1: f64,
+        speed: f64,
+        medium: &TipMedium,
+    ) -> [f64; 2] {
+        let Some((ai, aii)) = medium.moving_factors(speed) else {
+            return [f64::NAN; 2];
+        };
+        if !j1.is_finite() {
+            return [f64::NAN; 2];
+        }
+        if j1 <= 0.0 {
+            return [0.0; 2];
+        }
+        let [dn, dt] = self.tip_opening(ci, t);
+        let (pn, pt) = (dn / ai, dt / aii);
+        let r = pn.hypot(pt);
+        let (c, s) = if r > 1e-12 * self.h {
+            (pn / r, pt / r)
+        } else {
+            (1.0, 0.0)
+        };
+        let k = (medium.e_prime * j1 / (ai * c * c + aii * s * s)).sqrt();
+        [k * c, k * s]
+    }
+
+    /// K of a tip: the interaction integral for a tip at rest (speed 0 over the speed
+    /// window); for a moving tip the crack-opening K of [`Self::cod_k`] (the static auxiliary
+    /// fields do not hold for a moving tip); NaN at and above c_R.
+    pub(super) fn tip_k(
+        &self,
+        ci: usize,
+        t: usize,
+        tf: &TipFrameJ,
+        speed: f64,
+        medium: &TipMedium,
+    ) -> [f64; 2] {
+        if speed == 0.0 {
+            tf.k_int
+        } else {
+            self.cod_k(ci, t, tf.j1, speed, medium)
+        }
+    }
+
+    /// Crack-tip rows now.
+    pub fn tip_rows(&mut self, v: &View<'_>, time: f64) -> Vec<CrackTipRow> {
+        let mut rows = Vec::new();
+        for ci in 0..self.cracks.len() {
+            for t in 0..2 {
+                if !self.cracks[ci].tips[t].active {
+                    continue;
+                }
+                let tf = self.tip_frame_j(ci, t, v, time);
+                let (tip, j1, j2) = (tf.tip, tf.j1, tf.j2);
+                let c = &self.cracks[ci];
+                let speed = self.tip_speed(&c.tips[t], time);
+                let medium = self.medium(v, tip);
+                let [k1, k2] = self.tip_k(ci, t, &tf, speed, &medium);
+                let [k1_cod, k2_cod] = self.cod_k(ci, t, j1, speed, &medium);
+                let c = &self.cracks[ci];
+                rows.push(CrackTipRow {
+                    time,
+                    crack: ci as u32,
+                    tip: t as u32,
+                    x: tip[0],
+                    y: tip[1],
+                    length: c.length(),
+                    speed,
+                    j1,
+                    j2,
+                    k1,
+                    k2,
+                    growing: c.tips[t].grew,
+                    j1_half: tf.j_half[0],
+                    j2_half: tf.j_half[1],
+                    j1_double: tf.j_double[0],
+                    j2_double: tf.j_double[1],
+                    k1_cod,
+                    k2_cod,
+                });
+            }
+        }
+        rows
+    }
+
+    pub(super) fn nearest_material(&self, v: &View<'_>, x: [f64; 2]) -> usize {
+        if v.mats.len() == 1 {
+            return 0;
+        }
+        let p = v.parts;
+        let mut best = (f64::INFINITY, 0usize);
+        for (k, m) in p.kin.iter().zip(&p.mech) {
+            let d = dist(k.x, x);
+            if d < best.0 {
+                best = (d, m.mat as usize);
+            }
+        }
+        best.1
+    }
+}

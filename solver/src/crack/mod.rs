@@ -1,0 +1,334 @@
+//! Explicit cracks (`algorithm.md` §3–§7; Nairn 2003, Guo & Nairn 2004/2006).
+//!
+//! This file holds the data (crack points, tips, cracks, the [`Cracks`] set with its scratch,
+//! the [`View`] of the simulation that J and propagation read) and the construction; each
+//! stage of the crack step lives in its own file, in step order:
+//!
+//! * Geometry (built here; side and crossing tests and the broad phase in `geometry.rs`):
+//!   each crack is a polyline of crack points, each with its line position and an "above"
+//!   (left of the directed polyline) and "below" surface position. Scene segments are
+//!   subdivided to at most h/2 so the surfaces and the crack opening are resolved. An end
+//!   outside every body is a mouth, not a tip, and is pushed 2h further out so the fields
+//!   separate cleanly at the surface.
+//! * Fields (§3, `fields.rs`): for every particle–node pair the segment x_p → x_i is tested
+//!   against the crack segments registered in the particle's cell (broad phase: a per-cell
+//!   list rebuilt each step). An odd number of crossings puts the pair in field 1. Tie rule: a
+//!   point exactly on a crack line counts as above (left), consistently in every orientation
+//!   test, so a node on the line is classified without ambiguity.
+//! * Contact (§4, `contact.rs`) at every momentum stage, as ±Δp so momentum is conserved
+//!   exactly.
+//! * Motion (§5, `motion.rs`): each surface point moves with the mass-weighted velocity of its
+//!   own side's fields on the 4 nodes of its cell; the line point takes the mean of its two
+//!   surfaces.
+//! * J (§6, `j_integral.rs`): contour of grid lines, a square of half-size `j_contour` cells
+//!   around the node nearest the tip, nodal values as mass-weighted particle averages of the
+//!   node's own field, trapezoid rule, the edge crossed by the crack split at the crossing with
+//!   each face using its own node's values; plus the area term over the particles inside the
+//!   square.
+//! * K (§6, `j_integral.rs`): K_I² + K_II² from E'·J1 (with A_I(v), A_II(v) for a moving
+//!   tip), the mode ratio K_I/K_II = δ_n/δ_t from the crack opening about 2h behind the tip.
+//! * Propagation (§7, `propagation.rs`): G ≥ toughness grows the tip by cfl·h (the seed's
+//!   C_L·Δt) in the chosen direction; segments stay at least h/2 long.
+
+mod contact;
+mod domain;
+mod fields;
+mod geometry;
+mod j_integral;
+mod motion;
+mod propagation;
+
+pub use contact::Stage;
+pub use fields::SlotInfo;
+pub use geometry::crosses;
+
+use std::collections::VecDeque;
+
+use fracture_api::Scene;
+use fracture_api::scene::{Analysis, ContactLaw, JIntegral, Propagation, ShapeFunction};
+
+use crate::grid::{GridGeom, Node};
+use crate::material::Elastic;
+use crate::particles::Particles;
+use crate::tip_mechanics::TipMedium;
+
+use fields::{ChunkEntries, FieldEntry};
+use geometry::{dist, norm, sub};
+
+/// A point of a crack: its line position and its two surfaces.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct CrackPoint {
+    /// Position of the crack line.
+    pub x: [f64; 2],
+    /// Surface on the left of the directed polyline.
+    pub above: [f64; 2],
+    /// Surface on the right.
+    pub below: [f64; 2],
+    /// Where the crack line's material point at this crack point sits in the undeformed body
+    /// (the scene's coordinates): the point itself for the scene's points, the reference
+    /// position the growth chose for grown ones.
+    pub x0: [f64; 2],
+}
+
+impl CrackPoint {
+    fn at(x: [f64; 2]) -> Self {
+        CrackPoint::grown(x, x)
+    }
+    fn grown(x: [f64; 2], x0: [f64; 2]) -> Self {
+        CrackPoint {
+            x,
+            above: x,
+            below: x,
+            x0,
+        }
+    }
+}
+
+/// State of one end of a crack.
+#[derive(Debug, Clone, Default)]
+pub struct TipState {
+    /// A real tip (false for a mouth, or a tip that has cut through the body).
+    pub active: bool,
+    /// Total growth of this tip (m).
+    pub advance: f64,
+    /// Energy released by its growth per unit thickness (J/m): Σ G·Δa over growth steps,
+    /// with G the energy release rate that triggered each step.
+    pub released: f64,
+    /// (time, advance) over the last speed window.
+    history: VecDeque<(f64, f64)>,
+    /// The tip advanced in the last step.
+    pub grew: bool,
+    /// J and K cached at a time.
+    cached_j: Option<(f64, j_integral::TipEval)>,
+}
+
+/// One crack.
+#[derive(Debug, Clone)]
+pub struct Crack {
+    /// Points from the start (tip 0) to the end (tip 1).
+    pub pts: Vec<CrackPoint>,
+    /// Tip 0 and tip 1.
+    pub tips: [TipState; 2],
+    contact: ContactLaw,
+    propagation: Propagation,
+    /// How J is evaluated (domain or contour).
+    j_method: JIntegral,
+    /// Length added at each end by the mouth extension (not reported).
+    ext: [f64; 2],
+}
+
+impl Crack {
+    /// Current length along the path, without the mouth extensions.
+    pub fn length(&self) -> f64 {
+        let l: f64 = self.pts.windows(2).map(|w| dist(w[0].x, w[1].x)).sum();
+        l - self.ext[0] - self.ext[1]
+    }
+
+    /// Tip position and outward unit direction e1 of tip `t`.
+    pub fn tip_frame(&self, t: usize) -> ([f64; 2], [f64; 2]) {
+        let n = self.pts.len();
+        let (tip, prev) = if t == 0 {
+            (self.pts[0].x, self.pts[1].x)
+        } else {
+            (self.pts[n - 1].x, self.pts[n - 2].x)
+        };
+        let d = sub(tip, prev);
+        let l = norm(d).max(1e-300);
+        (tip, [d[0] / l, d[1] / l])
+    }
+}
+
+/// All cracks of a scene, with the scratch the crack steps reuse.
+pub struct Cracks {
+    /// The cracks.
+    pub cracks: Vec<Crack>,
+    /// Records of the field-1 nodes, parallel to the simulation's field-1 table.
+    pub slots: Vec<SlotInfo>,
+    h: f64,
+    cfl: f64,
+    thickness: f64,
+    speed_window: f64,
+    // Broad phase: segments (crack, segment) registered per cell, CSR.
+    cell_start: Vec<u32>,
+    cell_segs: Vec<(u32, u32)>,
+    entries: Vec<FieldEntry>,
+    /// Per-chunk entries and first error of the parallel mask pass.
+    chunk_entries: Vec<ChunkEntries>,
+    /// Normal contact impulse |Δp_n| of the last force-stage contact at each node (dense over
+    /// grid storage): the friction capacity of faces that are in contact but not approaching
+    /// at the extrapolation stages.
+    normal_impulse: Vec<f64>,
+    ncx: usize,
+    ncy: usize,
+    /// J-integrals evaluated so far (cache misses of `tip_j`): a work counter for benchmarks.
+    j_evaluations: u64,
+    /// The tip constants of each material in the scene's 2D state.
+    media: Vec<TipMedium>,
+    /// Force-stage contact force on the above side's material at each field-1 slot (the
+    /// crack-face traction of the J face term); empty until the first force-stage contact.
+    face_force: Vec<[f64; 2]>,
+}
+
+/// A mass-weighted nodal average at x: Σ S q(n) / Σ S m over the 4 nodes of x's cell (bilinear
+/// S) that `node` gives and that carry mass. None outside the grid or where no such node has
+/// mass.
+fn mass_weighted_at<'n>(
+    geom: &GridGeom,
+    x: [f64; 2],
+    node: impl Fn(usize, usize) -> Option<&'n Node>,
+    q: impl Fn(&Node) -> [f64; 2],
+) -> Option<[f64; 2]> {
+    let xi = geom.xi(x);
+    let (cx, cy) = (xi[0].floor(), xi[1].floor());
+    if cx < 0.0 || cy < 0.0 || cx as usize + 1 >= geom.nx || cy as usize + 1 >= geom.ny {
+        return None;
+    }
+    let (fx, fy) = (xi[0] - cx, xi[1] - cy);
+    let (cx, cy) = (cx as usize, cy as usize);
+    let (mut m, mut sum) = (0.0, [0.0; 2]);
+    for (a, wa) in [(0, 1.0 - fx), (1, fx)] {
+        for (b, wb) in [(0, 1.0 - fy), (1, fy)] {
+            if let Some(n) = node(cx + a, cy + b)
+                && n.m > 0.0
+            {
+                let (s, qn) = (wa * wb, q(n));
+                m += s * n.m;
+                sum[0] += s * qn[0];
+                sum[1] += s * qn[1];
+            }
+        }
+    }
+    (m > 0.0).then(|| [sum[0] / m, sum[1] / m])
+}
+
+impl Cracks {
+    /// The cracks of `scene`.
+    pub fn new(scene: &Scene, geom: &GridGeom, mats: &[Elastic]) -> Self {
+        let h = geom.h;
+        let cracks = scene
+            .cracks
+            .iter()
+            .map(|c| {
+                // Subdivide each segment to at most h/2.
+                let mut pts = vec![CrackPoint::at(c.points[0])];
+                for w in c.points.windows(2) {
+                    let n = (dist(w[0], w[1]) / (0.5 * h)).ceil().max(1.0) as usize;
+                    for k in 1..=n {
+                        let t = k as f64 / n as f64;
+                        pts.push(CrackPoint::at([
+                            w[0][0] + t * (w[1][0] - w[0][0]),
+                            w[0][1] + t * (w[1][1] - w[0][1]),
+                        ]));
+                    }
+                }
+                let inside = |p: [f64; 2]| scene.bodies.iter().any(|b| b.region.contains(p));
+                let mut ext = [0.0; 2];
+                let mut tips = [TipState::default(), TipState::default()];
+                for end in 0..2 {
+                    let n = pts.len();
+                    let (i, j) = if end == 0 { (0, 1) } else { (n - 1, n - 2) };
+                    if inside(pts[i].x) {
+                        tips[end].active = true;
+                    } else {
+                        // Mouth: extend 2h outward along the end segment.
+                        let d = sub(pts[i].x, pts[j].x);
+                        let l = norm(d).max(1e-300);
+                        let e = 2.0 * h;
+                        let x = [pts[i].x[0] + e * d[0] / l, pts[i].x[1] + e * d[1] / l];
+                        pts[i] = CrackPoint::at(x);
+                        ext[end] = e;
+                    }
+                }
+                Crack {
+                    pts,
+                    tips,
+                    contact: c.contact.clone(),
+                    propagation: c.propagation.clone(),
+                    j_method: JIntegral::default_for(c, h),
+                    ext,
+                }
+            })
+            .collect();
+        Cracks {
+            cracks,
+            slots: Vec::new(),
+            h,
+            cfl: scene.time.cfl,
+            thickness: scene.thickness,
+            speed_window: scene.output.speed_window,
+            cell_start: Vec::new(),
+            cell_segs: Vec::new(),
+            entries: Vec::new(),
+            chunk_entries: Vec::new(),
+            normal_impulse: vec![0.0; geom.storage_len()],
+            ncx: geom.nx - 1,
+            ncy: geom.ny - 1,
+            j_evaluations: 0,
+            media: mats
+                .iter()
+                .map(|m| TipMedium::new(m.e, m.nu, m.rho, scene.analysis == Analysis::PlaneStress))
+                .collect(),
+            face_force: Vec::new(),
+        }
+    }
+
+    /// J-integral evaluations so far (one per tip and distinct sample time; a second request
+    /// at the same time is served from the cache and not counted).
+    pub fn j_evaluations(&self) -> u64 {
+        self.j_evaluations
+    }
+
+    /// The crack lines (for snapshots), without mouth extensions.
+    pub fn lines(&self) -> Vec<Vec<[f64; 2]>> {
+        self.cracks
+            .iter()
+            .map(|c| {
+                let mut l: Vec<[f64; 2]> = c.pts.iter().map(|p| p.x).collect();
+                let n = l.len();
+                for (end, (i, j)) in [(0usize, 1usize), (n - 1, n - 2)].into_iter().enumerate() {
+                    if c.ext[end] > 0.0 {
+                        let d = sub(l[i], l[j]);
+                        let len = norm(d).max(1e-300);
+                        let e = c.ext[end].min(len);
+                        l[i] = [l[i][0] - e * d[0] / len, l[i][1] - e * d[1] / len];
+                    }
+                }
+                l
+            })
+            .collect()
+    }
+}
+
+/// Read-only state of the simulation that the J-integral and propagation need (the grid of
+/// the last step is still in place between steps).
+pub struct View<'a> {
+    /// Grid geometry.
+    pub geom: &'a GridGeom,
+    /// Shape functions.
+    pub shape: ShapeFunction,
+    /// Particles.
+    pub parts: &'a Particles,
+    /// Materials.
+    pub mats: &'a [Elastic],
+    /// Field-0 nodes.
+    pub nodes: &'a [Node],
+    /// Field-1 nodes.
+    pub f1: &'a [Node],
+    /// Storage index → field-1 slot.
+    pub slot_of: &'a [u32],
+    /// Particle range of each strip.
+    pub strip_bounds: &'a [usize],
+}
+
+impl View<'_> {
+    #[inline(always)]
+    fn node(&self, ix: usize, iy: usize, field: u8) -> Option<&Node> {
+        let idx = self.geom.index(ix, iy);
+        if field == 0 {
+            Some(&self.nodes[idx])
+        } else {
+            let s = *self.slot_of.get(idx)?;
+            (s != u32::MAX).then(|| &self.f1[s as usize])
+        }
+    }
+}

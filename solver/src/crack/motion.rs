@@ -1,0 +1,116 @@
+//! Crack motion (`algorithm.md` §5): each surface point moves with the mass-weighted velocity
+//! of its own side's fields on the 4 nodes of its cell; the line point takes the mean of its
+//! two surfaces, and at a tip both surfaces move with the mean.
+
+use crate::grid::{GridGeom, Node};
+
+use super::geometry::{crosses, seg_normal};
+use super::{Cracks, mass_weighted_at};
+
+impl Cracks {
+    /// The field of node `index` on the same side as `from` (a point just off the crack):
+    /// field 0 when the line from → node does not cross a crack, field 1 when it does.
+    #[allow(clippy::too_many_arguments)]
+    fn side_node<'n>(
+        &self,
+        geom: &GridGeom,
+        from: [f64; 2],
+        ix: usize,
+        iy: usize,
+        nodes: &'n [Node],
+        f1: &'n [Node],
+        slot_of: &[u32],
+    ) -> Option<&'n Node> {
+        let node = geom.node_pos(ix, iy);
+        let mut count = 0;
+        for &(ci, si) in self.segs_near(geom, from) {
+            let c = &self.cracks[ci as usize];
+            if crosses(from, node, c.pts[si as usize].x, c.pts[si as usize + 1].x) {
+                count += 1;
+            }
+        }
+        let idx = geom.index(ix, iy);
+        if count % 2 == 0 {
+            Some(&nodes[idx])
+        } else {
+            let s = slot_of[idx];
+            (s != u32::MAX).then(|| &f1[s as usize])
+        }
+    }
+
+    /// Velocity at x of the side reached from `from`, bilinear and mass-weighted over the 4
+    /// nodes of x's cell, using the re-extrapolated momenta.
+    #[allow(clippy::too_many_arguments)]
+    fn side_velocity(
+        &self,
+        geom: &GridGeom,
+        x: [f64; 2],
+        from: [f64; 2],
+        nodes: &[Node],
+        f1: &[Node],
+        slot_of: &[u32],
+    ) -> Option<[f64; 2]> {
+        // Σ S m v = Σ S q.
+        mass_weighted_at(
+            geom,
+            x,
+            |ix, iy| self.side_node(geom, from, ix, iy, nodes, f1, slot_of),
+            |n| n.q,
+        )
+    }
+
+    /// Move the crack surfaces and lines with the grid velocities (§5).
+    pub fn move_surfaces(
+        &mut self,
+        geom: &GridGeom,
+        nodes: &[Node],
+        f1: &[Node],
+        slot_of: &[u32],
+        _m_tiny: f64,
+        dt: f64,
+    ) {
+        let eps = 1e-3 * self.h;
+        for ci in 0..self.cracks.len() {
+            let n = self.cracks[ci].pts.len();
+            for k in 0..n {
+                let c = &self.cracks[ci];
+                // Local direction of the crack at point k.
+                let (pa, pb) = if k == 0 {
+                    (c.pts[0].x, c.pts[1].x)
+                } else if k == n - 1 {
+                    (c.pts[n - 2].x, c.pts[n - 1].x)
+                } else {
+                    (c.pts[k - 1].x, c.pts[k + 1].x)
+                };
+                let nrm = seg_normal(pa, pb); // above → below
+                let pt = c.pts[k];
+                let from_above = [pt.above[0] - eps * nrm[0], pt.above[1] - eps * nrm[1]];
+                let from_below = [pt.below[0] + eps * nrm[0], pt.below[1] + eps * nrm[1]];
+                let va = self.side_velocity(geom, pt.above, from_above, nodes, f1, slot_of);
+                let vb = self.side_velocity(geom, pt.below, from_below, nodes, f1, slot_of);
+                let (va, vb) = match (va, vb) {
+                    (Some(a), Some(b)) => (a, b),
+                    (Some(a), None) => (a, a),
+                    (None, Some(b)) => (b, b),
+                    (None, None) => continue,
+                };
+                let is_tip = (k == 0 && c.tips[0].active) || (k == n - 1 && c.tips[1].active);
+                let p = &mut self.cracks[ci].pts[k];
+                if is_tip {
+                    // The faces meet at a tip: both surfaces move with the mean.
+                    let v = [0.5 * (va[0] + vb[0]), 0.5 * (va[1] + vb[1])];
+                    p.x = [p.x[0] + dt * v[0], p.x[1] + dt * v[1]];
+                    p.above = p.x;
+                    p.below = p.x;
+                } else {
+                    p.above = [p.above[0] + dt * va[0], p.above[1] + dt * va[1]];
+                    p.below = [p.below[0] + dt * vb[0], p.below[1] + dt * vb[1]];
+                    p.x = [
+                        0.5 * (p.above[0] + p.below[0]),
+                        0.5 * (p.above[1] + p.below[1]),
+                    ];
+                }
+            }
+        }
+    }
+}

@@ -1,0 +1,168 @@
+//! Boundary conditions and loads (`algorithm.md` §2): prescribed velocities resolved to grid
+//! nodes and imposed on the momenta (after P2G and after re-extrapolation) and, through the
+//! force, after the force pass (the reaction's work counts as external work); traction loads
+//! ramped to the start of the step for the particle passes.
+
+use fracture_api::Scene;
+
+use super::Simulation;
+use crate::grid::{GridGeom, Node};
+
+/// A prescribed-velocity condition resolved to grid nodes.
+#[derive(Debug, Clone)]
+pub(super) struct BcNodes {
+    nodes: Vec<u32>,
+    vx: Option<f64>,
+    vy: Option<f64>,
+    ramp: f64,
+    start: f64,
+    end: f64,
+}
+
+impl BcNodes {
+    /// The scene's velocity conditions, each with the grid nodes inside its region.
+    pub(super) fn resolve(scene: &Scene, geom: &GridGeom) -> Vec<BcNodes> {
+        scene
+            .boundary_conditions
+            .iter()
+            .map(|bc| {
+                let mut nodes = Vec::new();
+                for ix in 0..geom.nx {
+                    for iy in 0..geom.ny {
+                        if bc.region.contains(geom.node_pos(ix, iy)) {
+                            nodes.push(geom.index(ix, iy) as u32);
+                        }
+                    }
+                }
+                BcNodes {
+                    nodes,
+                    vx: bc.velocity.x,
+                    vy: bc.velocity.y,
+                    ramp: bc.ramp_time.unwrap_or(0.0),
+                    start: bc.start.unwrap_or(0.0),
+                    end: bc.end.unwrap_or(f64::INFINITY),
+                }
+            })
+            .collect()
+    }
+
+    /// Prescribed velocity components at time t (None where free or inactive).
+    pub(super) fn velocity(&self, t: f64) -> [Option<f64>; 2] {
+        if t < self.start || t > self.end {
+            return [None, None];
+        }
+        let r = if self.ramp > 0.0 {
+            (t / self.ramp).min(1.0)
+        } else {
+            1.0
+        };
+        [self.vx.map(|v| v * r), self.vy.map(|v| v * r)]
+    }
+}
+
+/// A traction load: traction × thickness (N/m) and its ramp time.
+#[derive(Debug, Clone, Copy)]
+pub(super) struct LoadForce {
+    t: [f64; 2],
+    ramp: f64,
+}
+
+impl LoadForce {
+    /// The scene's traction loads, in scene order (a particle's `Mech::load` is 1 + index).
+    pub(super) fn resolve(scene: &Scene) -> Vec<LoadForce> {
+        scene
+            .loads
+            .iter()
+            .map(|l| LoadForce {
+                t: [
+                    l.traction[0] * scene.thickness,
+                    l.traction[1] * scene.thickness,
+                ],
+                ramp: l.ramp_time.unwrap_or(0.0),
+            })
+            .collect()
+    }
+}
+
+impl Simulation {
+    /// The loads' ramped force per unit edge length at time `t0` (the start of the step),
+    /// read by the force and update passes.
+    pub(super) fn ramp_loads(&mut self, t0: f64) {
+        for (l, out) in self.loads.iter().zip(self.load_now.iter_mut()) {
+            let r = if l.ramp > 0.0 {
+                (t0 / l.ramp).min(1.0)
+            } else {
+                1.0
+            };
+            *out = [l.t[0] * r, l.t[1] * r];
+        }
+    }
+
+    /// Velocity boundary conditions on the extrapolated (`reextrapolated == false`: p) or
+    /// re-extrapolated (q) momenta, on every field of each constrained node.
+    pub(super) fn apply_bc_momentum(&mut self, t: f64, reextrapolated: bool) {
+        let m_tiny = self.m_tiny;
+        for bc in &self.bcs {
+            let v = bc.velocity(t);
+            if v[0].is_none() && v[1].is_none() {
+                continue;
+            }
+            for &i in &bc.nodes {
+                let i = i as usize;
+                let slot = self.slot_of.get(i).copied().unwrap_or(u32::MAX);
+                let apply = |n: &mut Node| {
+                    if n.m <= m_tiny {
+                        return;
+                    }
+                    let target = if reextrapolated { &mut n.q } else { &mut n.p };
+                    for k in 0..2 {
+                        if let Some(vk) = v[k] {
+                            target[k] = n.m * vk;
+                        }
+                    }
+                };
+                apply(&mut self.nodes[i]);
+                if slot != u32::MAX {
+                    apply(&mut self.f1[slot as usize]);
+                }
+            }
+        }
+    }
+
+    /// Boundary conditions after the force pass: fix the force so that p + Δt f meets the
+    /// prescribed velocity; the reaction does work at the node's mid-step velocity.
+    pub(super) fn bc_force_fix(&mut self, t1: f64) {
+        let dt = self.dt;
+        let m_tiny = self.m_tiny;
+        let mut work = 0.0;
+        for bc in &self.bcs {
+            let v = bc.velocity(t1);
+            if v[0].is_none() && v[1].is_none() {
+                continue;
+            }
+            for &i in &bc.nodes {
+                let i = i as usize;
+                let slot = self.slot_of.get(i).copied().unwrap_or(u32::MAX);
+                let mut apply = |n: &mut Node| {
+                    if n.m <= m_tiny {
+                        return;
+                    }
+                    for k in 0..2 {
+                        if let Some(vk) = v[k] {
+                            let f_new = (n.m * vk - n.p[k]) / dt;
+                            let v_mid = 0.5 * (n.p[k] / n.m + vk);
+                            work += (f_new - n.f[k]) * v_mid * dt;
+                            n.f[k] = f_new;
+                        }
+                    }
+                };
+                apply(&mut self.nodes[i]);
+                if slot != u32::MAX {
+                    apply(&mut self.f1[slot as usize]);
+                }
+            }
+        }
+        self.external_work += work;
+        self.work_abs += work.abs();
+    }
+}

@@ -1,0 +1,199 @@
+//! The grid between the particle passes (`algorithm.md` §2): zeroing what the last step
+//! wrote, the crack velocity-field table (§3), the active box, nodal velocities and
+//! accelerations (v = p/m, a = f/m, v = q/m), and damping forces.
+
+use fracture_api::scene::Damping;
+use rayon::prelude::*;
+
+use super::transfer::Acc;
+use super::{Simulation, StepError};
+use crate::crack::Stage;
+use crate::grid::{Node, PAD};
+
+impl Simulation {
+    /// Zero the grid where the last step wrote.
+    pub(super) fn reset_grid(&mut self) {
+        let [x0, x1, y0, y1] = self.active_box;
+        if x1 >= x0 && self.active_nodes > 0 {
+            let ny = self.geom.ny;
+            let start = (x0 + PAD) * ny;
+            let end = (x1 + 1 + PAD) * ny;
+            self.nodes[start..end]
+                .par_chunks_mut(ny)
+                .for_each(|col| col[y0..=y1].fill(Node::default()));
+        }
+        for &i in &self.f1_index {
+            self.slot_of[i as usize] = u32::MAX;
+        }
+        self.f1.clear();
+        self.f1_index.clear();
+    }
+
+    /// Crack velocity fields of every particle–node pair and the field-1 node table.
+    pub(super) fn setup_fields(&mut self) -> Result<(), StepError> {
+        let Some(cr) = self.cracks.as_mut() else {
+            return Ok(());
+        };
+        self.counters.crack_field_passes += 1;
+        cr.assign_fields(
+            &self.geom,
+            self.shape,
+            &self.parts.kin,
+            &self.parts.mech,
+            &mut self.parts.fmask,
+            &mut self.f1_index,
+        )
+        .map_err(|(idx, fields)| {
+            let (ix, iy) = self.geom.node_of(idx);
+            let p = self.geom.node_pos(ix, iy);
+            StepError::TooManyFields {
+                step: self.steps + 1,
+                x: p[0],
+                y: p[1],
+                fields,
+                max: 2,
+            }
+        })?;
+        self.f1.resize(self.f1_index.len(), Node::default());
+        for (slot, &i) in self.f1_index.iter().enumerate() {
+            self.slot_of[i as usize] = slot as u32;
+        }
+        Ok(())
+    }
+
+    /// The grid box (clamped, inclusive) of a P2G's reduction; `None` when it wrote nothing.
+    pub(super) fn box_of(&self, acc: &Acc) -> Option<[usize; 4]> {
+        if !acc.has_box {
+            return None;
+        }
+        let g = self.geom;
+        Some([
+            acc.bx[0].max(0) as usize,
+            (acc.bx[1] as usize).min(g.nx - 1),
+            acc.bx[2].max(0) as usize,
+            (acc.bx[3] as usize).min(g.ny - 1),
+        ])
+    }
+
+    /// Zero the spare grid where it was last written (allocated on first use): the fused
+    /// pass 4 scatters the next step's P2G into it (`transfer.rs`).
+    pub(super) fn zero_alt(&mut self) {
+        if self.nodes_alt.len() != self.nodes.len() {
+            self.nodes_alt = vec![Node::default(); self.nodes.len()];
+            self.alt_box = None;
+        }
+        if let Some([x0, x1, y0, y1]) = self.alt_box.take() {
+            let ny = self.geom.ny;
+            self.nodes_alt[(x0 + PAD) * ny..(x1 + 1 + PAD) * ny]
+                .par_chunks_mut(ny)
+                .for_each(|col| col[y0..=y1].fill(Node::default()));
+        }
+    }
+
+    /// At the start of a step: when the last step's fused pass 4 did this step's P2G, swap
+    /// its grid in (the old one becomes the spare, dirty in its active box) and return the
+    /// P2G's reduction.
+    pub(super) fn take_prefetched_p2g(&mut self) -> Option<Acc> {
+        let acc = self.prefetched.take()?;
+        std::mem::swap(&mut self.nodes, &mut self.nodes_alt);
+        self.alt_box = (self.active_nodes > 0).then_some(self.active_box);
+        Some(acc)
+    }
+
+    pub(super) fn set_active_box(&mut self, acc: &Acc) {
+        if !acc.has_box {
+            self.active_nodes = 0;
+            return;
+        }
+        let g = self.geom;
+        let b = [
+            acc.bx[0].max(0) as usize,
+            (acc.bx[1] as usize).min(g.nx - 1),
+            acc.bx[2].max(0) as usize,
+            (acc.bx[3] as usize).min(g.ny - 1),
+        ];
+        self.active_box = b;
+        let ny = g.ny;
+        let m_tiny = self.m_tiny;
+        let cols = &self.nodes[(b[0] + PAD) * ny..(b[1] + 1 + PAD) * ny];
+        self.active_nodes = cols
+            .par_chunks(ny)
+            .map(|c| c[b[2]..=b[3]].iter().filter(|n| n.m > m_tiny).count())
+            .sum::<usize>()
+            + self.f1.len();
+    }
+
+    /// Nodal velocity (p/m after extrapolation, q/m after re-extrapolation) or acceleration
+    /// (f/m after the force stage) on every active node and field.
+    pub(super) fn nodal(&mut self, stage: Stage) {
+        let m_tiny = self.m_tiny;
+        let set = move |n: &mut Node| {
+            if n.m > m_tiny {
+                let inv = 1.0 / n.m;
+                match stage {
+                    Stage::Extrapolated => n.v = [n.p[0] * inv, n.p[1] * inv],
+                    Stage::Forces => n.a = [n.f[0] * inv, n.f[1] * inv],
+                    Stage::Reextrapolated => n.v = [n.q[0] * inv, n.q[1] * inv],
+                }
+            } else {
+                n.v = [0.0; 2];
+                n.a = [0.0; 2];
+            }
+        };
+        let [x0, x1, y0, y1] = self.active_box;
+        let ny = self.geom.ny;
+        if self.active_nodes > 0 {
+            self.nodes[(x0 + PAD) * ny..(x1 + 1 + PAD) * ny]
+                .par_chunks_mut(ny)
+                .for_each(|c| c[y0..=y1].iter_mut().for_each(set));
+        }
+        self.f1.iter_mut().for_each(set);
+    }
+
+    /// Damping after the force pass: a grid force against the motion (kinetic: local
+    /// non-viscous; viscous: mass-proportional); the work it removes is recorded as
+    /// dissipated.
+    pub(super) fn damp_forces(&mut self) {
+        let dt = self.dt;
+        let m_tiny = self.m_tiny;
+        let damp = self.damping.clone();
+        if !matches!(damp, Damping::None) {
+            let damp_node = move |n: &mut Node| -> f64 {
+                if n.m <= m_tiny {
+                    return 0.0;
+                }
+                let v = [n.p[0] / n.m, n.p[1] / n.m];
+                match damp {
+                    Damping::Viscous { coefficient } => {
+                        let fd = [coefficient * n.p[0], coefficient * n.p[1]];
+                        n.f[0] -= fd[0];
+                        n.f[1] -= fd[1];
+                        (fd[0] * v[0] + fd[1] * v[1]) * dt
+                    }
+                    Damping::Kinetic { coefficient } => {
+                        let mut d = 0.0;
+                        for k in 0..2 {
+                            let fd = coefficient * n.f[k].abs() * v[k].signum();
+                            n.f[k] -= fd;
+                            d += fd * v[k] * dt;
+                        }
+                        d
+                    }
+                    Damping::None => 0.0,
+                }
+            };
+            let [x0, x1, y0, y1] = self.active_box;
+            let ny = self.geom.ny;
+            let cols = &mut self.nodes[(x0 + PAD) * ny..(x1 + 1 + PAD) * ny];
+            let sums = &mut self.col_sums[..x1 + 1 - x0];
+            cols.par_chunks_mut(ny)
+                .zip(sums.par_iter_mut())
+                .for_each(|(c, s)| *s = c[y0..=y1].iter_mut().map(&damp_node).sum());
+            let mut d: f64 = sums.iter().sum();
+            for n in &mut self.f1 {
+                d += damp_node(n);
+            }
+            self.dissipated += d;
+        }
+    }
+}

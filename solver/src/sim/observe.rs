@@ -1,0 +1,225 @@
+//! Observing a simulation: read-only views (scene, time, particles, grid), energies
+//! (`algorithm.md` §2), crack-tip rows with J and K computed on demand (§6), work counters of
+//! the optional phases, and field snapshots (mass-weighted nodal averages of particle values).
+
+use fracture_api::Scene;
+use fracture_api::results::{CrackTipRow, EnergyRow, FieldComponent, Snapshot, field_components};
+use fracture_api::scene::FieldKind;
+
+use super::Simulation;
+use crate::crack::Cracks;
+use crate::grid::GridGeom;
+use crate::particles::Particles;
+use crate::shape::Weights2;
+
+/// How often the optional phases of a step ran: cheap counters (incremented once per phase
+/// call, outside the particle and node loops) that show what a scene skips.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+pub struct WorkCounters {
+    /// Steps taken.
+    pub steps: u64,
+    /// Crack velocity-field assignments (one per step with cracks, §3).
+    pub crack_field_passes: u64,
+    /// Crack-face contact passes (three per step with cracks, §4).
+    pub contact_passes: u64,
+    /// Crack-surface moves (one per step with cracks, §5).
+    pub surface_moves: u64,
+    /// Propagation checks (one per step with cracks, §7).
+    pub propagation_checks: u64,
+    /// J-integral evaluations (per tip, on a history sample or a growth check, §6).
+    pub j_evaluations: u64,
+}
+
+/// Read-only views.
+impl Simulation {
+    /// The scene.
+    pub fn scene(&self) -> &Scene {
+        &self.scene
+    }
+    /// Simulated time (s).
+    pub fn time(&self) -> f64 {
+        self.time
+    }
+    /// Steps taken.
+    pub fn steps_taken(&self) -> u64 {
+        self.steps
+    }
+    /// Δt (s).
+    pub fn time_step(&self) -> f64 {
+        self.dt
+    }
+    /// End time (s).
+    pub fn end_time(&self) -> f64 {
+        self.scene.time.end
+    }
+    /// Steps to reach the end time.
+    pub fn total_steps(&self) -> u64 {
+        self.total_steps
+    }
+    /// Whether the end time is reached.
+    pub fn is_finished(&self) -> bool {
+        self.steps >= self.total_steps
+    }
+    /// Number of particles.
+    pub fn particle_count(&self) -> usize {
+        self.parts.len()
+    }
+    /// Nodes of the grid box.
+    pub fn grid_node_count(&self) -> usize {
+        self.geom.nx * self.geom.ny
+    }
+    /// Nodes (and extra crack fields) touched by particles in the last step.
+    pub fn active_node_count(&self) -> usize {
+        self.active_nodes
+    }
+    /// Threads in use.
+    pub fn threads(&self) -> usize {
+        self.threads
+    }
+    /// Grid geometry.
+    pub fn grid(&self) -> &GridGeom {
+        &self.geom
+    }
+    /// The particles (sorted by cell; `cold[i].id` is the creation index).
+    pub fn particles(&self) -> &Particles {
+        &self.parts
+    }
+
+    /// Energies now (J per the scene's thickness).
+    pub fn energy(&self) -> EnergyRow {
+        EnergyRow {
+            time: self.time,
+            kinetic: self.kinetic,
+            strain: self.strain,
+            external_work: self.external_work,
+            dissipated: self.dissipated,
+            total_error: self.kinetic + self.strain + self.dissipated
+                - self.external_work
+                - self.initial_total,
+        }
+    }
+
+    /// One row per crack tip now (J and K computed here, on demand).
+    pub fn crack_tips(&mut self) -> Vec<CrackTipRow> {
+        let Some(mut cr) = self.cracks.take() else {
+            return Vec::new();
+        };
+        let rows = cr.tip_rows(&self.view(), self.time);
+        self.cracks = Some(cr);
+        rows
+    }
+
+    /// The cracks, if the scene has any.
+    pub fn cracks(&self) -> Option<&Cracks> {
+        self.cracks.as_deref()
+    }
+
+    /// How often the optional (crack) phases have run so far.
+    pub fn work_counters(&self) -> WorkCounters {
+        WorkCounters {
+            steps: self.steps,
+            j_evaluations: self.cracks.as_ref().map_or(0, |c| c.j_evaluations()),
+            ..self.counters
+        }
+    }
+
+    /// Fields sampled at the grid nodes now: mass-weighted averages of particle values
+    /// (NaN where no particle reaches a node).
+    pub fn snapshot(&self, index: u32, fields: &[FieldKind]) -> Snapshot {
+        let g = self.geom;
+        let mut names: Vec<&'static str> = Vec::new();
+        for f in fields {
+            for c in field_components(*f) {
+                if !names.contains(c) {
+                    names.push(c);
+                }
+            }
+        }
+        let nn = g.nx * g.ny;
+        let nc = names.len();
+        let mut mass = vec![0.0f64; nn];
+        let mut acc = vec![0.0f64; nn * nc];
+        let thickness = self.scene.thickness;
+        let fringe_c = self.scene.output.fringe_constant.unwrap_or(f64::NAN);
+        let p = &self.parts;
+        let mut vals = vec![0.0f64; nc];
+        for i in 0..p.len() {
+            let k = p.kin[i];
+            let s = p.stress[i];
+            // Small strain from the stress through the compliance (exact for linear
+            // elasticity): ε = [σ − ν(tr σ − σ)]/E per axis, γ = σxy/μ.
+            let mt = &self.mats[p.mech[i].mat as usize];
+            let e = [
+                (s[0] - mt.nu * (s[1] + s[3])) / mt.e,
+                (s[1] - mt.nu * (s[0] + s[3])) / mt.e,
+                s[2] / mt.c66,
+            ];
+            for (c, name) in names.iter().enumerate() {
+                vals[c] = match *name {
+                    "sxx" => s[0],
+                    "syy" => s[1],
+                    "sxy" => s[2],
+                    "exx" => e[0],
+                    "eyy" => e[1],
+                    "exy" => 0.5 * e[2],
+                    "vx" => k.v[0],
+                    "vy" => k.v[1],
+                    "speed" => k.v[0].hypot(k.v[1]),
+                    "ux" => k.x[0] - p.cold[i].x0[0],
+                    "uy" => k.x[1] - p.cold[i].x0[1],
+                    // N = h(σ1 − σ2)/f_σ, σ1 − σ2 = 2·sqrt(((σxx − σyy)/2)² + σxy²).
+                    "fringe" => thickness * 2.0 * (0.5 * (s[0] - s[1])).hypot(s[2]) / fringe_c,
+                    "material" => p.mech[i].mat as f64,
+                    _ => 0.0,
+                };
+            }
+            let w = Weights2::new(self.shape, g.xi(k.x), p.mech[i].lh);
+            for a in 0..3 {
+                for b in 0..3 {
+                    let sh = w.s(a, b);
+                    if sh == 0.0 {
+                        continue;
+                    }
+                    let ix = (w.x.base + a as i32) as usize;
+                    let iy = (w.y.base + b as i32) as usize;
+                    if ix >= g.nx || iy >= g.ny {
+                        continue;
+                    }
+                    let n = iy * g.nx + ix;
+                    let sm = sh * p.mech[i].m;
+                    mass[n] += sm;
+                    for c in 0..nc {
+                        acc[n * nc + c] += sm * vals[c];
+                    }
+                }
+            }
+        }
+        let components = names
+            .iter()
+            .enumerate()
+            .map(|(c, name)| FieldComponent {
+                name: (*name).to_string(),
+                values: (0..nn)
+                    .map(|n| {
+                        if mass[n] > self.m_snapshot {
+                            (acc[n * nc + c] / mass[n]) as f32
+                        } else {
+                            f32::NAN
+                        }
+                    })
+                    .collect(),
+            })
+            .collect();
+        Snapshot {
+            index,
+            time: self.time,
+            nx: g.nx as u32,
+            ny: g.ny as u32,
+            origin: g.origin,
+            cell_size: g.h,
+            fields: fields.iter().map(|f| f.name().to_string()).collect(),
+            components,
+            cracks: self.cracks.as_ref().map(|c| c.lines()).unwrap_or_default(),
+        }
+    }
+}
