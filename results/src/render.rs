@@ -14,6 +14,9 @@
 //!   `|v| (m/s)`, `fringe order N`), tick values on the colour bar, a length scale bar, the
 //!   time, and the sampling; text in an embedded 5×7 font of our own, no font files.
 //! * Cracks are drawn on top, light with a dark outline so they show on any map.
+//!
+//! (About 750 lines: the options, the report, the field lookup and the pixel loop are one
+//! pipeline read top to bottom; the canvas, font, legend and raster parts are submodules.)
 
 mod canvas;
 mod font;
