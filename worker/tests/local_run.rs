@@ -394,7 +394,7 @@ fn crack_tips_get_one_row_per_tip_per_sample() {
     assert_eq!(tips.len() - 1, 2 * (energy.len() - 1));
     for (i, l) in tips[1..].iter().enumerate() {
         let cols: Vec<&str> = l.split(',').collect();
-        assert_eq!(cols.len(), 12, "{l}");
+        assert_eq!(cols.len(), CRACK_TIPS_CSV_HEADER.split(',').count(), "{l}");
         assert_eq!(cols[1], "0", "{l}");
         assert_eq!(cols[2], (i % 2).to_string(), "{l}");
         assert!(cols[11] == "0" || cols[11] == "1", "{l}");

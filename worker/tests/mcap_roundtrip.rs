@@ -73,7 +73,7 @@ fn tip(i: usize, t: u32) -> CrackTipRow {
         k2: -2.0e4,
         growing: i % 2 == 1,
         j1_half: 10.1 / 3.0,
-        j2_half: f64::NAN,
+        j2_half: -1.5e-3,
         j1_double: 9.9 / 3.0,
         j2_double: -2.0e-3,
         k1_cod: 1.2e6,
