@@ -54,6 +54,26 @@ fn ring(r: f64, big_r: f64) -> (f64, f64) {
     }
 }
 
+/// Whether the ring of outer radius `r` around `tip` lies inside the grid and the material:
+/// each of 32 points of its outer circle falls within the grid next to a node that carries
+/// mass in some field.
+pub(super) fn ring_fits(v: &View<'_>, tip: [f64; 2], r: f64) -> bool {
+    let g = v.geom;
+    if !(r.is_finite() && r > 0.0) {
+        return false;
+    }
+    (0..32).all(|i| {
+        let a = f64::from(i) * std::f64::consts::PI / 16.0;
+        let xi = g.xi([tip[0] + r * a.cos(), tip[1] + r * a.sin()]);
+        let (ix, iy) = (xi[0].round(), xi[1].round());
+        if ix < 1.0 || iy < 1.0 || ix + 1.0 >= g.nx as f64 || iy + 1.0 >= g.ny as f64 {
+            return false;
+        }
+        let (ix, iy) = (ix as usize, iy as usize);
+        v.node(ix, iy, 0).is_some_and(|n| n.m > 0.0) || v.node(ix, iy, 1).is_some_and(|n| n.m > 0.0)
+    })
+}
+
 /// Face-term accumulator of one two-field node: Σ S m ∂u/∂x and Σ S m per field.
 #[derive(Debug, Clone, Copy, Default)]
 struct FaceNode {
@@ -80,32 +100,7 @@ impl Cracks {
         let r_max = radii.iter().fold(0.0_f64, |a, &b| a.max(b));
         let nan = [f64::NAN; 2];
 
-        // Which rings lie inside the grid and the material: 32 points of each outer circle,
-        // each must fall within the grid and next to a node that carries mass in some field.
-        let mut ok = [true; 3];
-        for (k, &r) in radii.iter().enumerate() {
-            if !(r.is_finite() && r > 0.0) {
-                ok[k] = false;
-                continue;
-            }
-            for i in 0..32 {
-                let a = i as f64 * std::f64::consts::PI / 16.0;
-                let x = [tip[0] + r * a.cos(), tip[1] + r * a.sin()];
-                let xi = g.xi(x);
-                let (ix, iy) = (xi[0].round(), xi[1].round());
-                if ix < 1.0 || iy < 1.0 || ix + 1.0 >= g.nx as f64 || iy + 1.0 >= g.ny as f64 {
-                    ok[k] = false;
-                    break;
-                }
-                let (ix, iy) = (ix as usize, iy as usize);
-                let has_mass = v.node(ix, iy, 0).is_some_and(|n| n.m > 0.0)
-                    || v.node(ix, iy, 1).is_some_and(|n| n.m > 0.0);
-                if !has_mass {
-                    ok[k] = false;
-                    break;
-                }
-            }
-        }
+        let ok = radii.map(|r| ring_fits(v, tip, r));
         if !ok.iter().any(|&o| o) {
             return DomainResult {
                 j: [nan; 3],
@@ -139,30 +134,18 @@ impl Cracks {
             let pxi = g.xi(k.x);
             let w = Weights2::new(v.shape, pxi, m.lh);
             let mask = if has_mask { p.fmask[i] } else { 0 };
-            // Own-field nodal acceleration and velocity gradient (∂u̇_i/∂x_k).
-            let mut acc = [0.0; 2];
-            let mut gv = [[0.0; 2]; 2];
-            for a in 0..3 {
-                for b in 0..3 {
-                    let sh = w.s(a, b);
-                    let gr = w.g(a, b);
-                    if sh == 0.0 && gr[0] == 0.0 && gr[1] == 0.0 {
-                        continue;
-                    }
-                    let ix = (w.x.base + a as i32) as usize;
-                    let iy = (w.y.base + b as i32) as usize;
-                    let field = ((mask >> (3 * a + b)) & 1) as u8;
-                    if let Some(nd) = v.node(ix, iy, field)
-                        && nd.m > 0.0
-                    {
-                        for q in 0..2 {
-                            acc[q] += sh * nd.f[q] / nd.m;
-                            let vel = nd.q[q] / nd.m;
-                            gv[q][0] += vel * gr[0] / h;
-                            gv[q][1] += vel * gr[1] / h;
+            let (acc, gv) = v.own_field_rates(&w, mask);
+            // The face term's nodal ∂u/∂x of each side at the two-field nodes with a contact
+            // force.
+            if faces {
+                for a in 0..3 {
+                    for b in 0..3 {
+                        let sh = w.s(a, b);
+                        if sh <= 0.0 {
+                            continue;
                         }
-                    }
-                    if faces && sh > 0.0 {
+                        let ix = (w.x.base + a as i32) as usize;
+                        let iy = (w.y.base + b as i32) as usize;
                         let idx = g.index(ix, iy);
                         if let Some(&slot) = v.slot_of.get(idx)
                             && slot != u32::MAX
@@ -171,8 +154,8 @@ impl Cracks {
                                 .get(slot as usize)
                                 .is_some_and(|f| f[0] != 0.0 || f[1] != 0.0)
                         {
+                            let f = ((mask >> (3 * a + b)) & 1) as usize;
                             let e = face_nodes.entry(slot).or_insert((idx, FaceNode::default()));
-                            let f = field as usize;
                             e.1.m[f] += sh * m.m;
                             for q in 0..4 {
                                 e.1.gu[f][q] += sh * m.m * gu[q];

@@ -13,6 +13,7 @@ use crate::grid::STRIP;
 use crate::shape::Weights2;
 use crate::tip_mechanics::TipMedium;
 
+use super::domain::ring_fits;
 use super::geometry::{cross_param, crosses, dist, sub};
 use super::{Cracks, View};
 
@@ -35,6 +36,8 @@ pub(super) struct TipEval {
     j_double: [f64; 2],
     /// (K_I, K_II) of the interaction integral.
     k_int: [f64; 2],
+    /// The tip's medium (its nearest material).
+    medium: TipMedium,
 }
 
 /// J of a tip in its own frame (e1 ahead along the crack, e2 to its left), with K.
@@ -50,6 +53,8 @@ pub(super) struct TipFrameJ {
     pub(super) j_double: [f64; 2],
     /// (K_I, K_II) of the interaction integral.
     pub(super) k_int: [f64; 2],
+    /// The tip's medium (its nearest material).
+    pub(super) medium: TipMedium,
 }
 
 impl Cracks {
@@ -106,45 +111,27 @@ impl Cracks {
                 && pxi[0] < box_hi[0]
                 && pxi[1] > box_lo[1]
                 && pxi[1] < box_hi[1];
-            let mut acc = [0.0; 2];
-            let mut gv = [[0.0; 2]; 2];
+            // Nodal values of the window (field-0 pairs only: each node its own side).
             for a in 0..3 {
                 for b in 0..3 {
                     let sh = w.s(a, b);
-                    let gr = w.g(a, b);
-                    if sh == 0.0 && gr[0] == 0.0 && gr[1] == 0.0 {
+                    if sh <= 0.0 {
                         continue;
                     }
                     let ix = (w.x.base + a as i32) as usize;
                     let iy = (w.y.base + b as i32) as usize;
                     let field = ((mask >> (3 * a + b)) & 1) as u8;
-                    if field == 0
-                        && ix >= wx0
-                        && iy >= wy0
-                        && ix < wx0 + wn
-                        && iy < wy0 + wn
-                        && sh > 0.0
-                    {
+                    if field == 0 && ix >= wx0 && iy >= wy0 && ix < wx0 + wn && iy < wy0 + wn {
                         let wk = (ix - wx0) * wn + (iy - wy0);
                         mass[wk] += sh * m.m;
                         for q in 0..NV {
                             vals[wk * NV + q] += sh * m.m * pv[q];
                         }
                     }
-                    if inside
-                        && let Some(nd) = v.node(ix, iy, field)
-                        && nd.m > 0.0
-                    {
-                        for r in 0..2 {
-                            acc[r] += sh * nd.f[r] / nd.m;
-                            let vel = nd.q[r] / nd.m;
-                            gv[r][0] += vel * gr[0] / h;
-                            gv[r][1] += vel * gr[1] / h;
-                        }
-                    }
                 }
             }
             if inside {
+                let (acc, gv) = v.own_field_rates(&w, mask);
                 // ∫_A ρ [ü_i ∂u_i/∂x_k − u̇_i ∂u̇_i/∂x_k] dA, per unit thickness.
                 let da = m.vol / self.thickness * rho;
                 for kk in 0..2 {
@@ -210,7 +197,7 @@ impl Cracks {
     }
 
     /// The tip's medium (its nearest material in the scene's 2D state).
-    pub(super) fn medium(&self, v: &View<'_>, x: [f64; 2]) -> TipMedium {
+    fn medium(&self, v: &View<'_>, x: [f64; 2]) -> TipMedium {
         self.media[self.nearest_material(v, x)]
     }
 
@@ -219,44 +206,32 @@ impl Cracks {
         let (tip, _) = self.cracks[ci].tip_frame(t);
         let medium = self.medium(v, tip);
         let h = self.h;
-        let (radii, contour): (&[f64], _) = match self.cracks[ci].j_method {
-            JIntegral::Domain { radius } => (&[radius], None),
+        let (radius, contour) = match self.cracks[ci].j_method {
+            JIntegral::Domain { radius } => (radius, false),
             // The contour's K and path-independence report come from the domain integral at
             // the default radius, or the largest smaller ring (down to two cells) that fits in
             // the material (its own J stays the contour's).
-            JIntegral::Contour { .. } => (
-                &[
-                    JIntegral::DEFAULT_RADIUS_CELLS * h,
-                    4.0 * h,
-                    3.0 * h,
-                    2.0 * h,
-                ],
-                Some(()),
-            ),
-        };
-        let mut d = None;
-        for &r in radii {
-            let dr = self.domain_integrals(ci, t, v, [r, 0.5 * r, 2.0 * r], &medium);
-            let fits = dr.k[0].is_finite();
-            d = Some(dr);
-            if fits {
-                break;
+            JIntegral::Contour { .. } => {
+                let radius = [JIntegral::DEFAULT_RADIUS_CELLS, 4.0, 3.0, 2.0]
+                    .map(|c| c * h)
+                    .into_iter()
+                    .find(|&r| ring_fits(v, tip, r))
+                    .unwrap_or(2.0 * h);
+                (radius, true)
             }
-        }
-        let nan = [f64::NAN; 2];
-        let d = d.unwrap_or(super::domain::DomainResult {
-            j: [nan; 3],
-            k: nan,
-        });
-        let j = match contour {
-            Some(()) => self.compute_j(ci, t, v).j,
-            None => d.j[0],
+        };
+        let d = self.domain_integrals(ci, t, v, [radius, 0.5 * radius, 2.0 * radius], &medium);
+        let j = if contour {
+            self.compute_j(ci, t, v).j
+        } else {
+            d.j[0]
         };
         TipEval {
             j,
             j_half: d.j[1],
             j_double: d.j[2],
             k_int: d.k,
+            medium,
         }
     }
 
@@ -294,6 +269,7 @@ impl Cracks {
             j_half: frame(e.j_half),
             j_double: frame(e.j_double),
             k_int: e.k_int,
+            medium: e.medium,
         }
     }
 }
@@ -372,18 +348,11 @@ impl Cracks {
     /// K of a tip: the interaction integral for a tip at rest (speed 0 over the speed
     /// window); for a moving tip the crack-opening K of [`Self::cod_k`] (the static auxiliary
     /// fields do not hold for a moving tip); NaN at and above c_R.
-    pub(super) fn tip_k(
-        &self,
-        ci: usize,
-        t: usize,
-        tf: &TipFrameJ,
-        speed: f64,
-        medium: &TipMedium,
-    ) -> [f64; 2] {
+    pub(super) fn tip_k(&self, ci: usize, t: usize, tf: &TipFrameJ, speed: f64) -> [f64; 2] {
         if speed == 0.0 {
             tf.k_int
         } else {
-            self.cod_k(ci, t, tf.j1, speed, medium)
+            self.cod_k(ci, t, tf.j1, speed, &tf.medium)
         }
     }
 
@@ -399,9 +368,8 @@ impl Cracks {
                 let (tip, j1, j2) = (tf.tip, tf.j1, tf.j2);
                 let c = &self.cracks[ci];
                 let speed = self.tip_speed(&c.tips[t], time);
-                let medium = self.medium(v, tip);
-                let [k1, k2] = self.tip_k(ci, t, &tf, speed, &medium);
-                let [k1_cod, k2_cod] = self.cod_k(ci, t, j1, speed, &medium);
+                let [k1, k2] = self.tip_k(ci, t, &tf, speed);
+                let [k1_cod, k2_cod] = self.cod_k(ci, t, j1, speed, &tf.medium);
                 let c = &self.cracks[ci];
                 rows.push(CrackTipRow {
                     time,

@@ -50,6 +50,7 @@ use fracture_api::scene::{Analysis, ContactLaw, JIntegral, Propagation, ShapeFun
 use crate::grid::{GridGeom, Node};
 use crate::material::Elastic;
 use crate::particles::Particles;
+use crate::shape::Weights2;
 use crate::tip_mechanics::TipMedium;
 
 use fields::{ChunkEntries, FieldEntry};
@@ -321,6 +322,38 @@ pub struct View<'a> {
 }
 
 impl View<'_> {
+    /// A particle's own-field nodal acceleration ü = Σ S f/m and velocity gradient
+    /// ∂u̇_i/∂x_k = Σ (q_i/m) ∂S/∂x_k, each node taken in the field `mask` gives the pair
+    /// (the area terms of J, `algorithm.md` §6).
+    pub(super) fn own_field_rates(&self, w: &Weights2, mask: u16) -> ([f64; 2], [[f64; 2]; 2]) {
+        let h = self.geom.h;
+        let mut acc = [0.0; 2];
+        let mut gv = [[0.0; 2]; 2];
+        for a in 0..3 {
+            for b in 0..3 {
+                let sh = w.s(a, b);
+                let gr = w.g(a, b);
+                if sh == 0.0 && gr[0] == 0.0 && gr[1] == 0.0 {
+                    continue;
+                }
+                let ix = (w.x.base + a as i32) as usize;
+                let iy = (w.y.base + b as i32) as usize;
+                let field = ((mask >> (3 * a + b)) & 1) as u8;
+                if let Some(nd) = self.node(ix, iy, field)
+                    && nd.m > 0.0
+                {
+                    for q in 0..2 {
+                        acc[q] += sh * nd.f[q] / nd.m;
+                        let vel = nd.q[q] / nd.m;
+                        gv[q][0] += vel * gr[0] / h;
+                        gv[q][1] += vel * gr[1] / h;
+                    }
+                }
+            }
+        }
+        (acc, gv)
+    }
+
     #[inline(always)]
     fn node(&self, ix: usize, iy: usize, field: u8) -> Option<&Node> {
         let idx = self.geom.index(ix, iy);

@@ -84,8 +84,7 @@ impl Cracks {
                 let (g, dir) = match direction {
                     GrowthDirection::MaxEnergyRelease | GrowthDirection::MaxHoopStress => {
                         let speed = self.tip_speed(&self.cracks[ci].tips[t], time);
-                        let medium = self.medium(v, tip);
-                        let k = self.tip_k(ci, t, &tf, speed, &medium);
+                        let k = self.tip_k(ci, t, &tf, speed);
                         if matches!(direction, GrowthDirection::MaxHoopStress) {
                             kink(hoop_stress_angle, k)
                         } else {
