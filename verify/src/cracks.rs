@@ -10,6 +10,17 @@ use fracture_solver::{Simulation, SolverConfig};
 
 use crate::*;
 
+/// Tension 1 MPa on the top and bottom particle rows of a body from y = `bottom` to `top`,
+/// each a band `lb` deep ([`Settings::load_band`]), ramped over `ramp`.
+pub(crate) fn end_tension(top: f64, bottom: f64, lb: f64, ramp: f64) -> Value {
+    json!([
+        {"region": {"rectangle": {"min": [0.0, top - lb], "max": [1.0, 1.0]}},
+         "traction": [0.0, 1.0e6], "ramp_time": ramp},
+        {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, bottom + lb]}},
+         "traction": [0.0, -1.0e6], "ramp_time": ramp}
+    ])
+}
+
 /// Centre crack 2a = 17 mm in a strip 2b = 80 mm wide and 120 mm tall (a/b = 0.2125), crack
 /// at mid-cell, tension σ = 1 MPa on both ends ramped over 150 µs, viscous damping 4·10⁴ 1/s,
 /// to 300 µs. Reference: K_I = σ√(πa)·F(a/b) (Tada).
@@ -28,12 +39,7 @@ pub fn center_crack(s: &Settings) -> Result<Built, VerifyError> {
         "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [m + 2.0 * b, m + 2.0 * half_h + h]}},
                     "particles_per_cell": s.particles_per_cell}],
         "cracks": [{"points": [[cx - a, cy], [cx + a, cy]], "j_contour": s.j_contour}],
-        "loads": [
-            {"region": {"rectangle": {"min": [0.0, 2.0 * half_h + m + h - lb], "max": [1.0, 1.0]}},
-             "traction": [0.0, 1.0e6], "ramp_time": 1.5e-4},
-            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, m + lb]}},
-             "traction": [0.0, -1.0e6], "ramp_time": 1.5e-4}
-        ],
+        "loads": end_tension(2.0 * half_h + m + h, m, lb, 1.5e-4),
         "damping": {"kind": "viscous", "coefficient": 4.0e4},
         "time": {"end": 3.0e-4, "cfl": s.cfl}
     });
@@ -60,12 +66,7 @@ pub fn edge_crack(s: &Settings) -> Result<Built, VerifyError> {
         "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [m + b, m + 2.0 * half_h + h]}},
                     "particles_per_cell": s.particles_per_cell}],
         "cracks": [{"points": [[m - 0.5 * h, cy], [m + a, cy]], "j_contour": s.j_contour}],
-        "loads": [
-            {"region": {"rectangle": {"min": [0.0, 2.0 * half_h + m + h - lb], "max": [1.0, 1.0]}},
-             "traction": [0.0, 1.0e6], "ramp_time": 1.2e-4},
-            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, m + lb]}},
-             "traction": [0.0, -1.0e6], "ramp_time": 1.2e-4}
-        ],
+        "loads": end_tension(2.0 * half_h + m + h, m, lb, 1.2e-4),
         "damping": {"kind": "viscous", "coefficient": 5.0e4},
         "time": {"end": 2.4e-4, "cfl": s.cfl}
     });

@@ -28,12 +28,7 @@ pub fn inclined_crack(s: &Settings, beta_deg: f64) -> Result<Built, VerifyError>
         "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [top, top]}},
                     "particles_per_cell": s.particles_per_cell}],
         "cracks": [{"points": [[c - a * cb, c - a * sb], [c + a * cb, c + a * sb]]}],
-        "loads": [
-            {"region": {"rectangle": {"min": [0.0, top - lb], "max": [1.0, 1.0]}},
-             "traction": [0.0, 1.0e6], "ramp_time": 1.5e-4},
-            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, m + lb]}},
-             "traction": [0.0, -1.0e6], "ramp_time": 1.5e-4}
-        ],
+        "loads": end_tension(top, m, lb, 1.5e-4),
         "damping": {"kind": "viscous", "coefficient": 4.0e4},
         "time": {"end": 3.0e-4, "cfl": s.cfl}
     });
