@@ -34,6 +34,7 @@ mod tests {
         assert!(back.growing);
         let e = EnergyRow {
             total_error: f64::NAN,
+            fracture: 2.0,
             ..EnergyRow::default()
         };
         let back: EnergyRow = serde_json::from_str(&serde_json::to_string(&e).unwrap_or_default())

@@ -5,7 +5,10 @@ use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
 /// Column header of `energy.csv`.
-pub const ENERGY_CSV_HEADER: &str = "time,kinetic,strain,external_work,dissipated,total_error";
+/// `run-output.md`'s columns; `fracture` (the part of `dissipated` spent on new crack
+/// surface) is the contract's extension at the end.
+pub const ENERGY_CSV_HEADER: &str =
+    "time,kinetic,strain,external_work,dissipated,total_error,fracture";
 /// Column header of `crack_tips.csv`.
 /// Column header of `crack_tips.csv`: `run-output.md`'s columns, then (an extension, at the
 /// end) the path-independence report and the crack-opening K.
@@ -47,20 +50,53 @@ pub struct EnergyRow {
     #[schemars(with = "Option<f64>")]
     #[schema(value_type = Option<f64>)]
     pub total_error: f64,
+    /// The part of `dissipated` spent on new crack surface: the work of the process-zone
+    /// tractions behind growing tips (and of cohesive interfaces). NaN (null) in rows written
+    /// before the column.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub fracture: f64,
+}
+
+/// A number as a CSV field: plain decimal for magnitudes in [1e-4, 1e15) and zero (`0`,
+/// `0.0125`, `2500`), scientific otherwise (`1.7e-5`, `5.2e9` is written `5200000000`), always
+/// the shortest text that reads back as the same f64; `NaN`, `inf`, `-inf` as such.
+pub fn csv_number(x: f64) -> String {
+    if !x.is_finite() {
+        return if x.is_nan() {
+            "NaN".into()
+        } else if x > 0.0 {
+            "inf".into()
+        } else {
+            "-inf".into()
+        };
+    }
+    let a = x.abs();
+    if a == 0.0 || (1e-4..1e15).contains(&a) {
+        format!("{x}")
+    } else {
+        format!("{x:e}")
+    }
 }
 
 impl EnergyRow {
     /// The row as a CSV line (no newline), columns as [`ENERGY_CSV_HEADER`].
     pub fn to_csv(&self) -> String {
-        format!(
-            "{:e},{:e},{:e},{:e},{:e},{:e}",
+        [
             self.time,
             self.kinetic,
             self.strain,
             self.external_work,
             self.dissipated,
-            self.total_error
-        )
+            self.total_error,
+            self.fracture,
+        ]
+        .map(csv_number)
+        .join(",")
     }
 }
 
@@ -174,23 +210,36 @@ pub struct CrackTipRow {
 impl CrackTipRow {
     /// The row as a CSV line (no newline), columns as [`CRACK_TIPS_CSV_HEADER`].
     pub fn to_csv(&self) -> String {
+        let n = |xs: &[f64]| {
+            xs.iter()
+                .map(|&x| csv_number(x))
+                .collect::<Vec<_>>()
+                .join(",")
+        };
         format!(
-            "{:e},{},{},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{:e},{}",
-            self.time,
+            "{},{},{},{},{},{}",
+            csv_number(self.time),
             self.crack,
             self.tip,
-            self.x,
-            self.y,
-            self.length,
-            self.speed,
-            self.j1,
-            self.j2,
-            self.k1,
-            self.k2,
-            u8::from(self.growing)
-        ) + &format!(
-            ",{:e},{:e},{:e},{:e},{:e},{:e}",
-            self.j1_half, self.j2_half, self.j1_double, self.j2_double, self.k1_cod, self.k2_cod
+            n(&[
+                self.x,
+                self.y,
+                self.length,
+                self.speed,
+                self.j1,
+                self.j2,
+                self.k1,
+                self.k2
+            ]),
+            u8::from(self.growing),
+            n(&[
+                self.j1_half,
+                self.j2_half,
+                self.j1_double,
+                self.j2_double,
+                self.k1_cod,
+                self.k2_cod
+            ])
         )
     }
 }
@@ -259,6 +308,28 @@ pub struct Summary {
     pub scene_hash: String,
     /// Version of the solver.
     pub solver_version: String,
+    /// The fracture energy of the run's growing tips (an extension of `run-output.md`): what
+    /// the new crack surface should take, what the growth mechanism dissipated, and the rest,
+    /// which stayed in the body (the seed's `wave` rule releases the new faces at once and
+    /// dissipates none of it). Absent for scenes without growth.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub fracture: Option<FractureEnergy>,
+}
+
+/// Fracture energy of the growing tips of a run (J per the scene's thickness × thickness, as
+/// `energy.csv`).
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
+pub struct FractureEnergy {
+    /// Σ Γ(v)·Δa·thickness over every advance of every tip: the energy the new surface takes.
+    pub required: f64,
+    /// The work of the process-zone tractions behind the tips (energy.csv's `fracture`, tips
+    /// only).
+    pub dissipated: f64,
+    /// required − dissipated: fracture energy the body kept (as waves and strain energy),
+    /// including that of faces whose zones are still opening at the end.
+    pub not_dissipated: f64,
+    /// New crack area (m², length × thickness).
+    pub new_area: f64,
 }
 
 /// Progress of a run.

@@ -374,15 +374,84 @@ pub enum Propagation {
     None,
     /// Grow while the energy release rate G reaches the toughness.
     EnergyRelease {
-        /// Critical energy release rate (J/m²).
-        toughness: f64,
+        /// Critical energy release rate Γ (J/m²): a number, or a table of (crack speed m/s,
+        /// Γ J/m²) rows, ascending in speed from 0, linear between rows, constant past the
+        /// last.
+        toughness: Toughness,
         /// Growth direction.
         #[serde(default)]
         direction: GrowthDirection,
         /// Growth speed law.
         #[serde(default)]
         speed: GrowthSpeed,
+        /// Time constant (s) of the filter on J that the equation of motion decides on
+        /// (`equation_of_motion` only). Default: the time a shear wave takes to cross the J
+        /// domain's radius, r/c_S ([`Propagation::DEFAULT_FILTER_RADII`] of it).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        filter_time: Option<f64>,
+        /// Length (m) of the process zone behind a tip that moves by the equation of motion:
+        /// the new faces are held by a traction that falls linearly to zero over an opening
+        /// δ_c = 2Γ/σ_c, σ_c = sqrt(π E' Γ / (8 l)), so each unit of new area dissipates Γ.
+        /// Default: a third of the J domain radius (the zone lies where the domain's weight
+        /// is 1). 0 switches the zone off (the new faces are released at once and the
+        /// fracture energy stays in the body, as with the seed's rule).
+        #[serde(default, skip_serializing_if = "Option::is_none")]
+        process_zone: Option<f64>,
     },
+}
+
+impl Propagation {
+    /// The default filter time is this many shear-wave transits of the J domain radius.
+    pub const DEFAULT_FILTER_RADII: f64 = 1.0;
+    /// The default process zone is this fraction of the J domain radius.
+    pub const DEFAULT_ZONE_FRACTION: f64 = 1.0 / 3.0;
+}
+
+/// Toughness Γ(v) (J/m²): a constant or a table against crack speed.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(untagged)]
+pub enum Toughness {
+    /// The same at every speed.
+    Constant(f64),
+    /// Rows (v m/s, Γ J/m²), ascending in v from 0; linear between rows, constant past the
+    /// last.
+    Table(Vec<Vec2>),
+}
+
+impl From<f64> for Toughness {
+    fn from(g: f64) -> Self {
+        Toughness::Constant(g)
+    }
+}
+
+impl Toughness {
+    /// Γ at crack speed v (m/s).
+    pub fn at(&self, v: f64) -> f64 {
+        match self {
+            Toughness::Constant(g) => *g,
+            Toughness::Table(rows) => {
+                let Some(first) = rows.first() else {
+                    return f64::NAN;
+                };
+                if v <= first[0] {
+                    return first[1];
+                }
+                for w in rows.windows(2) {
+                    let ([v0, g0], [v1, g1]) = (w[0], w[1]);
+                    if v <= v1 {
+                        let t = if v1 > v0 { (v - v0) / (v1 - v0) } else { 1.0 };
+                        return g0 + t * (g1 - g0);
+                    }
+                }
+                rows[rows.len() - 1][1]
+            }
+        }
+    }
+
+    /// Γ(0), the initiation toughness.
+    pub fn at_rest(&self) -> f64 {
+        self.at(0.0)
+    }
 }
 
 /// Direction in which a tip grows (`algorithm.md` §7).
@@ -402,13 +471,18 @@ pub enum GrowthDirection {
     Fixed(Vec2),
 }
 
-/// How fast a tip advances while it grows.
+/// How fast a tip advances while it grows (`algorithm.md` §7).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema)]
 #[serde(rename_all = "snake_case")]
 pub enum GrowthSpeed {
-    /// The seed's rule: the tip moves at C_L during a time step in which G ≥ toughness.
-    #[default]
+    /// The seed's rule: the tip moves at C_L during a time step in which G ≥ toughness
+    /// (its speed is set by the J contour and the grid; kept to reproduce the seed).
     Wave,
+    /// The default: the tip moves continuously at the speed v where the dynamic energy
+    /// release rate g(v)·G* (Freund, g ≈ 1 − v/c_R) equals Γ(v), deciding on J filtered over
+    /// `filter_time`.
+    #[default]
+    EquationOfMotion,
 }
 
 /// Prescribed velocity on the grid nodes inside a region.

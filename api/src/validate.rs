@@ -12,7 +12,7 @@ use serde::{Deserialize, Serialize};
 use crate::lattice;
 use crate::scene::{
     Analysis, ContactLaw, Damping, FieldKind, GrowthDirection, JIntegral, Propagation, Region,
-    Scene, Vec2,
+    Scene, Toughness, Vec2,
 };
 
 /// One validation problem.
@@ -433,10 +433,48 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
         if let Propagation::EnergyRelease {
             toughness,
             direction,
+            filter_time,
+            process_zone,
             ..
         } = &cr.propagation
         {
-            c.positive(&format!("{p}.propagation.toughness"), *toughness);
+            let tp = format!("{p}.propagation.toughness");
+            match toughness {
+                Toughness::Constant(g) => c.positive(&tp, *g),
+                Toughness::Table(rows) => {
+                    if rows.is_empty() {
+                        c.err(
+                            tp.clone(),
+                            serde_json::json!([]),
+                            "is an empty table (give [[v, Γ], …] rows)",
+                        );
+                    }
+                    for (k, r) in rows.iter().enumerate() {
+                        c.non_negative(&format!("{tp}.{k}.0"), r[0]);
+                        c.positive(&format!("{tp}.{k}.1"), r[1]);
+                        if k == 0 && r[0] != 0.0 {
+                            c.err(
+                                format!("{tp}.0.0"),
+                                r[0],
+                                "must be 0 (the table starts at rest)",
+                            );
+                        }
+                        if k > 0 && r[0] <= rows[k - 1][0] {
+                            c.err(
+                                format!("{tp}.{k}.0"),
+                                r[0],
+                                "must be above the previous row's speed (ascending)",
+                            );
+                        }
+                    }
+                }
+            }
+            if let Some(t) = filter_time {
+                c.positive(&format!("{p}.propagation.filter_time"), *t);
+            }
+            if let Some(l) = process_zone {
+                c.non_negative(&format!("{p}.propagation.process_zone"), *l);
+            }
             if let GrowthDirection::Fixed(d) = direction {
                 let dp = format!("{p}.propagation.direction.fixed");
                 if c.point(&dp, *d) && d[0] == 0.0 && d[1] == 0.0 {

@@ -234,11 +234,11 @@ fn run_writes_the_four_files() {
     let mut lines = energy.lines();
     assert_eq!(
         lines.next(),
-        Some("time,kinetic,strain,external_work,dissipated,total_error")
+        Some("time,kinetic,strain,external_work,dissipated,total_error,fracture")
     );
     let rows: Vec<&str> = lines.collect();
     assert!(!rows.is_empty());
-    assert!(rows.iter().all(|l| l.split(',').count() == 6));
+    assert!(rows.iter().all(|l| l.split(',').count() == 7));
     let tips = std::fs::read_to_string(out.join("crack_tips.csv")).unwrap();
     assert_eq!(
         tips,

@@ -681,6 +681,7 @@ fn summary() -> Summary {
         threads: 1,
         scene_hash: String::new(),
         solver_version: String::new(),
+        fracture: None,
     }
 }
 

@@ -18,7 +18,7 @@ fn cracks_with(law: serde_json::Value) -> Cracks {
         "time": {"end": 1.0}
     }));
     let geom = GridGeom::new([0.0, 0.0], [16.0, 16.0], 1.0);
-    Cracks::new(&s, &geom, &[])
+    Cracks::new(&s, &geom, &[], 1e-7)
 }
 
 fn node(v: &[f64]) -> Node {

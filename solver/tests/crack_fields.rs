@@ -19,7 +19,7 @@ fn cracks(points: serde_json::Value) -> (Cracks, GridGeom) {
         "time": {"end": 1.0}
     }));
     let geom = GridGeom::new([0.0, 0.0], [16.0, 16.0], 1.0);
-    (Cracks::new(&s, &geom, &[]), geom)
+    (Cracks::new(&s, &geom, &[], 1e-7), geom)
 }
 
 /// Field of the pair (particle at x, node (ix, iy)) and the node's slot record.

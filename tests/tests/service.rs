@@ -167,7 +167,7 @@ fn job_lifecycle_results_readable_while_running_and_after() {
         .expect("csv")
         .text()
         .expect("text");
-    assert!(csv.starts_with("time,kinetic,strain,external_work,dissipated,total_error\n"));
+    assert!(csv.starts_with("time,kinetic,strain,external_work,dissipated,total_error,fracture\n"));
     assert_eq!(csv.lines().count(), ne + 1);
     let csv = s
         .http

@@ -239,6 +239,7 @@ fn failed_summary(scene: Option<&Scene>, failure: FailureKind, message: String) 
         threads: 0,
         scene_hash: scene.map(Scene::hash).unwrap_or_default(),
         solver_version: fracture_api::SOLVER_VERSION.to_string(),
+        fracture: None,
     }
 }
 

@@ -8,7 +8,7 @@ use std::panic::{AssertUnwindSafe, catch_unwind};
 use std::time::Instant;
 
 use fracture_api::results::{
-    CrackTipRow, EnergyRow, FailureKind, Progress, RunStatus, Snapshot, Summary,
+    CrackTipRow, EnergyRow, FailureKind, FractureEnergy, Progress, RunStatus, Snapshot, Summary,
 };
 use fracture_api::scene::FieldKind;
 use fracture_api::{Scene, ValidScene};
@@ -32,6 +32,10 @@ pub(crate) trait Model {
     fn energy(&self) -> EnergyRow;
     fn crack_tips(&mut self) -> Vec<CrackTipRow>;
     fn snapshot(&self, index: u32, fields: &[FieldKind]) -> Snapshot;
+    /// The fracture-energy report of growing tips (None without growth).
+    fn fracture_energy(&self) -> Option<FractureEnergy> {
+        None
+    }
 }
 
 impl Model for Simulation {
@@ -70,6 +74,9 @@ impl Model for Simulation {
     }
     fn snapshot(&self, index: u32, fields: &[FieldKind]) -> Snapshot {
         Simulation::snapshot(self, index, fields)
+    }
+    fn fracture_energy(&self) -> Option<FractureEnergy> {
+        Simulation::fracture_energy(self)
     }
 }
 
@@ -128,6 +135,7 @@ fn base_summary(scene: &Scene) -> Summary {
         threads: 0,
         scene_hash: scene.hash(),
         solver_version: fracture_api::SOLVER_VERSION.to_string(),
+        fracture: None,
     }
 }
 
@@ -370,6 +378,7 @@ pub(crate) fn run_model<M: Model>(
 
     summary.steps = lp.model.steps_taken();
     summary.sim_time = lp.model.time();
+    summary.fracture = lp.model.fracture_energy();
     summary.wall_seconds = wall;
     summary.particle_steps_per_second = if wall > 0.0 {
         summary.particles as f64 * active_steps as f64 / wall

@@ -52,6 +52,7 @@ fn local_output_writes_the_run_output_files() {
         external_work: 4.0,
         dissipated: 0.5,
         total_error: -0.25,
+        fracture: 0.125,
     };
     let t = CrackTipRow {
         time: 1.0e-6,
@@ -108,18 +109,19 @@ fn local_output_writes_the_run_output_files() {
         threads: 1,
         scene_hash: "abc".into(),
         solver_version: "0.1.0".into(),
+        fracture: None,
     };
     sink.finish(&summary).unwrap();
 
     let energy = lines(&out.join("energy.csv"));
     assert_eq!(
         energy[0],
-        "time,kinetic,strain,external_work,dissipated,total_error"
+        "time,kinetic,strain,external_work,dissipated,total_error,fracture"
     );
     assert_eq!(energy[0], ENERGY_CSV_HEADER);
     assert_eq!(energy.len(), 3);
     let cols: Vec<f64> = energy[1].split(',').map(|c| c.parse().unwrap()).collect();
-    assert_eq!(cols, vec![1.0e-6, 2.0, 3.0, 4.0, 0.5, -0.25]);
+    assert_eq!(cols, vec![1.0e-6, 2.0, 3.0, 4.0, 0.5, -0.25, 0.125]);
 
     let tips = lines(&out.join("crack_tips.csv"));
     // run-output.md's columns first; the project's extension columns after them.
@@ -199,7 +201,7 @@ fn impact_bar_run_writes_the_run_directory() {
     assert!((61..=62).contains(&n), "{n} energy rows");
     for l in &energy[1..] {
         let cols: Vec<f64> = l.split(',').map(|c| c.parse().unwrap()).collect();
-        assert_eq!(cols.len(), 6, "{l}");
+        assert_eq!(cols.len(), 7, "{l}");
         assert!(cols.iter().all(|c| c.is_finite()), "{l}");
     }
     // The bar is being struck: kinetic energy grows from zero.

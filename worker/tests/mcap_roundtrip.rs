@@ -55,6 +55,7 @@ fn energy(i: usize) -> EnergyRow {
         external_work: 2.5e-3 * i as f64,
         dissipated: 0.0,
         total_error: -1.0e-17 * i as f64,
+        fracture: 1.0e-3 * i as f64,
     }
 }
 

@@ -47,7 +47,7 @@ impl Store {
         Self::fence_check(&mut tx, id, fence, lease).await?;
         for chunk in rows.chunks(100) {
             let mut q: QueryBuilder<Sqlite> = QueryBuilder::new(
-                "INSERT INTO energy (job_id, time, kinetic, strain, external_work, dissipated, total_error) ",
+                "INSERT INTO energy (job_id, time, kinetic, strain, external_work, dissipated, total_error, fracture) ",
             );
             q.push_values(chunk, |mut b, r| {
                 b.push_bind(id)
@@ -56,7 +56,8 @@ impl Store {
                     .push_bind(r.strain)
                     .push_bind(r.external_work)
                     .push_bind(r.dissipated)
-                    .push_bind(r.total_error);
+                    .push_bind(r.total_error)
+                    .push_bind(r.fracture);
             });
             q.build().execute(&mut *tx).await?;
         }
@@ -135,7 +136,7 @@ impl Store {
     /// Energy rows, optionally only those after `since`.
     pub async fn energy(&self, id: &str, since: Option<f64>) -> Result<Vec<EnergyRow>, StoreError> {
         let rows = sqlx::query(
-            "SELECT time, kinetic, strain, external_work, dissipated, total_error FROM energy
+            "SELECT time, kinetic, strain, external_work, dissipated, total_error, fracture FROM energy
              WHERE job_id = ? AND (? IS NULL OR time > ?) ORDER BY rowid",
         )
         .bind(id)
@@ -152,6 +153,7 @@ impl Store {
                     external_work: real(r, "external_work")?,
                     dissipated: real(r, "dissipated")?,
                     total_error: real(r, "total_error")?,
+                    fracture: real(r, "fracture")?,
                 })
             })
             .collect()

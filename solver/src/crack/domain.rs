@@ -41,7 +41,7 @@ pub(super) struct DomainResult {
 /// (0 at both edges of the ring), so the particle sum, a point quadrature with a few particles
 /// across the ring, does not see a jump of ∂q at the ring's edges.
 #[inline]
-fn ring(r: f64, big_r: f64) -> (f64, f64) {
+pub(super) fn ring(r: f64, big_r: f64) -> (f64, f64) {
     let r_in = 0.5 * big_r;
     if r <= r_in {
         (1.0, 0.0)

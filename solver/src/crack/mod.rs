@@ -37,10 +37,12 @@ mod geometry;
 mod j_integral;
 mod motion;
 mod propagation;
+mod zone;
 
 pub use contact::Stage;
 pub use fields::SlotInfo;
 pub use geometry::crosses;
+pub use zone::Zone;
 
 use std::collections::VecDeque;
 
@@ -69,6 +71,9 @@ pub struct CrackPoint {
     /// (the scene's coordinates): the point itself for the scene's points, the reference
     /// position the growth chose for grown ones.
     pub x0: [f64; 2],
+    /// The process-zone traction state of a point that growth by the equation of motion
+    /// created (`zone.rs`); None for the scene's points and the seed's rule.
+    pub zone: Option<Zone>,
 }
 
 impl CrackPoint {
@@ -81,6 +86,7 @@ impl CrackPoint {
             above: x,
             below: x,
             x0,
+            zone: None,
         }
     }
 }
@@ -99,6 +105,13 @@ pub struct TipState {
     history: VecDeque<(f64, f64)>,
     /// The tip advanced in the last step.
     pub grew: bool,
+    /// Energy the new surface takes per unit thickness (J/m): Σ Γ(v)·Δa over advances.
+    pub required: f64,
+    /// The driving force G filtered over the filter time (equation of motion); NaN until the
+    /// first finite sample.
+    pub g_filtered: f64,
+    /// The speed the equation of motion gave in the last step (m/s).
+    pub eom_speed: f64,
     /// J and K cached at a time.
     cached_j: Option<(f64, j_integral::TipEval)>,
 }
@@ -168,6 +181,10 @@ pub struct Cracks {
     /// Force-stage contact force on the above side's material at each field-1 slot (the
     /// crack-face traction of the J face term); empty until the first force-stage contact.
     face_force: Vec<[f64; 2]>,
+    /// Energy removed by the process-zone tractions so far (J, the scene's thickness).
+    zone_work: f64,
+    /// Time step (s).
+    dt: f64,
 }
 
 /// A mass-weighted nodal average at x: Σ S q(n) / Σ S m over the 4 nodes of x's cell (bilinear
@@ -204,7 +221,7 @@ fn mass_weighted_at<'n>(
 
 impl Cracks {
     /// The cracks of `scene`.
-    pub fn new(scene: &Scene, geom: &GridGeom, mats: &[Elastic]) -> Self {
+    pub fn new(scene: &Scene, geom: &GridGeom, mats: &[Elastic], scene_dt: f64) -> Self {
         let h = geom.h;
         let cracks = scene
             .cracks
@@ -225,6 +242,9 @@ impl Cracks {
                 let inside = |p: [f64; 2]| scene.bodies.iter().any(|b| b.region.contains(p));
                 let mut ext = [0.0; 2];
                 let mut tips = [TipState::default(), TipState::default()];
+                for t in &mut tips {
+                    t.g_filtered = f64::NAN;
+                }
                 for end in 0..2 {
                     let n = pts.len();
                     let (i, j) = if end == 0 { (0, 1) } else { (n - 1, n - 2) };
@@ -270,7 +290,34 @@ impl Cracks {
                 .map(|m| TipMedium::new(m.e, m.nu, m.rho, scene.analysis == Analysis::PlaneStress))
                 .collect(),
             face_force: Vec::new(),
+            zone_work: 0.0,
+            dt: scene_dt,
         }
+    }
+
+    /// Energy the process-zone tractions have removed so far (J, the scene's thickness).
+    pub fn zone_work(&self) -> f64 {
+        self.zone_work
+    }
+
+    /// Σ Γ(v)·Δa·thickness over every advance of every tip (J): the energy the new surface
+    /// takes; and the new crack area (m²).
+    pub fn fracture_required(&self) -> (f64, f64) {
+        let (mut e, mut a) = (0.0, 0.0);
+        for c in &self.cracks {
+            for t in &c.tips {
+                e += t.required * self.thickness;
+                a += t.advance * self.thickness;
+            }
+        }
+        (e, a)
+    }
+
+    /// Whether some tip can grow.
+    pub fn can_grow(&self) -> bool {
+        self.cracks
+            .iter()
+            .any(|c| !matches!(c.propagation, Propagation::None))
     }
 
     /// J-integral evaluations so far (one per tip and distinct sample time; a second request

@@ -1,16 +1,63 @@
-//! Propagation (`algorithm.md` §7): the growth criterion G ≥ toughness along the chosen
-//! direction (the kink of maximum energy release or of maximum hoop stress from K_I, K_II,
-//! or fixed along a material line with G = J1), the new tip point and
+//! Propagation (`algorithm.md` §7): the driving force G along the chosen direction (the kink
+//! of maximum energy release or of maximum hoop stress from K_I, K_II, or fixed along a
+//! material line with G = J1), how far the tip moves in this step, the new tip point and
 //! segment (segments stay at least h/2 long; a tip that runs out of material becomes a
 //! mouth), and the tip histories behind the moving-box tip speed.
+//!
+//! Two speed laws:
+//! * `wave`, the seed's: while G ≥ Γ the tip jumps cfl·h = c_L·Δt in that step; the new
+//!   faces are released at once (no fracture energy is dissipated: the summary reports it).
+//! * `equation_of_motion`: G is filtered, G_f += (1 − e^{−Δt/τ})(G − G_f), so a one-step
+//!   transient after an advance neither starts nor stops the tip; the static energy release
+//!   rate of the moment is G* = G_f/g(v) with v the speed of the last step and Freund's
+//!   g(v) = 1 − v/c_R (the mode I approximation, used for the mode II branch below c_R too);
+//!   the new speed is the smallest root of g(v)·G* = Γ(v) on [0, c_R) (none when
+//!   G* < Γ(0): the tip rests or arrests), and the tip moves v·Δt. Each point the tip leaves
+//!   behind carries a process-zone traction (`zone.rs`) that dissipates Γ per unit area.
 
-use fracture_api::scene::{GrowthDirection, Propagation};
+use fracture_api::scene::{GrowthDirection, GrowthSpeed, JIntegral, Propagation, Toughness};
 
 use crate::tip_mechanics::{hoop_stress_angle, kinked_k, max_energy_release_angle};
 
 use super::geometry::{dist, norm};
 use super::j_integral::TipFrameJ;
+use super::zone::Zone;
 use super::{CrackPoint, Cracks, TipState, View, mass_weighted_at};
+
+/// The equation of motion's speed: the smallest root on [0, c_R) of g(v)·G* = Γ(v), with
+/// G* = G_f/g(v_prev) and g(v) = 1 − v/c_R; 0 when G* < Γ(0) or nothing is finite.
+pub(crate) fn eom_speed(g_filtered: f64, v_prev: f64, c_r: f64, toughness: &Toughness) -> f64 {
+    if !(g_filtered.is_finite() && c_r.is_finite() && c_r > 0.0) {
+        return 0.0;
+    }
+    let g = |v: f64| (1.0 - v / c_r).max(0.0);
+    let g_star = g_filtered / g(v_prev.clamp(0.0, 0.999 * c_r));
+    let f = |v: f64| g(v) * g_star - toughness.at(v);
+    let f0 = f(0.0);
+    if f0.is_nan() || f0 <= 0.0 {
+        return 0.0;
+    }
+    // Scan for the first sign change (a table Γ(v) may cross more than once), then bisect.
+    let n = 64;
+    let (mut lo, mut hi) = (0.0, c_r);
+    for i in 1..=n {
+        let v = c_r * f64::from(i) / f64::from(n);
+        if f(v) <= 0.0 {
+            hi = v;
+            lo = c_r * f64::from(i - 1) / f64::from(n);
+            break;
+        }
+    }
+    for _ in 0..60 {
+        let mid = 0.5 * (lo + hi);
+        if f(mid) > 0.0 {
+            lo = mid;
+        } else {
+            hi = mid;
+        }
+    }
+    0.5 * (lo + hi)
+}
 
 /// The material displacement at x: the field-0 nodal displacement Σ S m (x_p − X_p) over the
 /// mass, mass-weighted over x's cell.
@@ -41,18 +88,66 @@ impl Cracks {
         }
     }
 
+    /// The outer radius of crack `ci`'s J domain (the contour's half-size for a contour).
+    fn j_radius(&self, ci: usize) -> f64 {
+        match self.cracks[ci].j_method {
+            JIntegral::Domain { radius } => radius,
+            JIntegral::Contour { cells } => f64::from(cells) * self.h,
+        }
+    }
+
+    /// The energy the process zones of tip `t` take per unit advance where the J domain's
+    /// weight q is below 1: Σ_k (1 − q(r_k))·(F_k/thickness)·∂δ/∂x1 over the zone points
+    /// (F_k the force on the above face, δ the separation, x1 along the tip's direction e1).
+    /// The domain integral without the zone tractions in its face term counts the zone at
+    /// weight q, J_domain = J_tip + Σ q z_k; adding this makes it J_tip + Σ z_k, the energy
+    /// release rate of the far field, whatever part of the zone the ring holds.
+    fn zone_outside_domain(&self, ci: usize, t: usize, e1: [f64; 2], radius: f64) -> f64 {
+        let c = &self.cracks[ci];
+        let n = c.pts.len();
+        if n < 3 {
+            return 0.0;
+        }
+        let tip = if t == 0 { c.pts[0].x } else { c.pts[n - 1].x };
+        let sep = |k: usize| {
+            let p = c.pts[k];
+            [p.above[0] - p.below[0], p.above[1] - p.below[1]]
+        };
+        let x1 = |k: usize| (c.pts[k].x[0] - tip[0]) * e1[0] + (c.pts[k].x[1] - tip[1]) * e1[1];
+        let mut sum = 0.0;
+        for k in 1..n - 1 {
+            let Some(z) = c.pts[k].zone else { continue };
+            let Some((f, _)) = z.last else { continue };
+            let r = dist(c.pts[k].x, tip);
+            let w = 1.0 - super::domain::ring(r, radius).0;
+            if w <= 0.0 {
+                continue;
+            }
+            let dx = x1(k + 1) - x1(k - 1);
+            if dx.abs() < 1e-12 * self.h {
+                continue;
+            }
+            let (da, db) = (sep(k + 1), sep(k - 1));
+            let dd = [(da[0] - db[0]) / dx, (da[1] - db[1]) / dx];
+            sum += w * (f[0] * dd[0] + f[1] * dd[1]) / self.thickness;
+        }
+        sum
+    }
+
     /// Check every growing tip (§7) and grow it; records the tip history. True if some tip
     /// advanced.
     pub fn propagate(&mut self, v: &View<'_>, time: f64) -> bool {
         let mut any = false;
-        let step_len = self.cfl * self.h;
+        let dt = self.dt;
         for ci in 0..self.cracks.len() {
             for t in 0..2 {
                 self.cracks[ci].tips[t].grew = false;
                 let Propagation::EnergyRelease {
                     toughness,
                     direction,
-                    ..
+                    speed,
+                    filter_time,
+                    process_zone,
                 } = self.cracks[ci].propagation.clone()
                 else {
                     continue;
@@ -62,8 +157,15 @@ impl Cracks {
                 }
                 let tf = self.tip_frame_j(ci, t, v, time);
                 let TipFrameJ {
-                    tip, e1, e2, j1, ..
+                    tip,
+                    e1,
+                    e2,
+                    mut j1,
+                    ..
                 } = tf;
+                if matches!(speed, GrowthSpeed::EquationOfMotion) {
+                    j1 += self.zone_outside_domain(ci, t, e1, self.j_radius(ci));
+                }
                 let kink = |angle: fn(f64, f64) -> f64, k: [f64; 2]| -> (f64, [f64; 2]) {
                     // G of the kink: J1 (the energy measure) times the kinked crack's
                     // |k(θ)|²/|K|² (Hussain, Pu & Underwood), θ from the criterion. A negative
@@ -104,9 +206,43 @@ impl Cracks {
                         (j1, d)
                     }
                 };
-                if g < toughness || !g.is_finite() {
-                    continue;
-                }
+                let radius = self.j_radius(ci);
+                let (step_len, gamma, zone_len) = match speed {
+                    GrowthSpeed::Wave => {
+                        if !(g.is_finite() && g >= toughness.at_rest()) {
+                            continue;
+                        }
+                        (self.cfl * self.h, toughness.at_rest(), 0.0)
+                    }
+                    GrowthSpeed::EquationOfMotion => {
+                        let tau = filter_time
+                            .unwrap_or(Propagation::DEFAULT_FILTER_RADII * radius / tf.medium.c_s);
+                        let tip_state = &mut self.cracks[ci].tips[t];
+                        if g.is_finite() {
+                            if tip_state.g_filtered.is_finite() {
+                                let a = 1.0 - (-dt / tau).exp();
+                                tip_state.g_filtered += a * (g - tip_state.g_filtered);
+                            } else {
+                                tip_state.g_filtered = g;
+                            }
+                        }
+                        let speed = eom_speed(
+                            tip_state.g_filtered,
+                            tip_state.eom_speed,
+                            tf.medium.c_r,
+                            &toughness,
+                        );
+                        tip_state.eom_speed = speed;
+                        if speed <= 0.0 {
+                            continue;
+                        }
+                        let zone_len =
+                            process_zone.unwrap_or(Propagation::DEFAULT_ZONE_FRACTION * radius);
+                        (speed * dt, toughness.at(speed), zone_len)
+                    }
+                };
+                let new_zone =
+                    (zone_len > 0.0).then(|| Zone::new(gamma, zone_len, tf.medium.e_prime));
                 let (tip_i, prev_i) = {
                     let n = self.cracks[ci].pts.len();
                     if t == 0 { (0, 1) } else { (n - 1, n - 2) }
@@ -155,15 +291,34 @@ impl Cracks {
                 }
                 // Keep segments at least h/2: extend a short tip segment instead of adding.
                 let short = dist(c.pts[tip_i].x, c.pts[prev_i].x) < 0.5 * self.h * (1.0 - 1e-9);
-                let point = CrackPoint::grown(new, ahead0);
+                let mut point = CrackPoint::grown(new, ahead0);
+                point.zone = new_zone;
                 if short {
+                    // The tip point moves on; a zone it carries is replaced by a fresh one
+                    // (a tip point carries no traction, so nothing is lost).
+                    if let Some(z) = c.pts[tip_i].zone.as_mut().zip(point.zone.as_mut()) {
+                        z.1.side = z.0.side;
+                    }
                     c.pts[tip_i] = point;
-                } else if t == 0 {
-                    c.pts.insert(0, point);
                 } else {
-                    c.pts.push(point);
+                    // The old tip point becomes a face point: a scene point gets a zone over
+                    // the half of the new segment it carries.
+                    if let Some(z) = new_zone
+                        && c.pts[tip_i].zone.is_none()
+                    {
+                        c.pts[tip_i].zone = Some(Zone {
+                            side: if t == 0 { -1 } else { 1 },
+                            ..z
+                        });
+                    }
+                    if t == 0 {
+                        c.pts.insert(0, point);
+                    } else {
+                        c.pts.push(point);
+                    }
                 }
                 c.tips[t].advance += step_len;
+                c.tips[t].required += gamma * step_len;
                 c.tips[t].released += g * step_len;
                 c.tips[t].grew = true;
                 c.tips[t].cached_j = None;

@@ -142,7 +142,7 @@ impl Simulation {
             sim.slot_of = vec![u32::MAX; storage];
             sim.parts.fmask = vec![0; n];
             sim.parts.grad_u = vec![[0.0; 4]; n];
-            sim.cracks = Some(Box::new(Cracks::new(scene, &sim.geom, &sim.mats)));
+            sim.cracks = Some(Box::new(Cracks::new(scene, &sim.geom, &sim.mats, sim.dt)));
         }
         sim.kinetic = sim.kinetic_energy();
         sim.initial_total = sim.kinetic;

@@ -153,6 +153,7 @@ impl Simulation {
         self.check(&acc)?;
         self.damp_forces();
         self.bc_force_fix(t1);
+        self.zone_forces();
         self.contact(Stage::Forces);
         self.nodal(Stage::Forces);
 
@@ -235,6 +236,21 @@ impl Simulation {
                 self.dt,
             );
             self.dissipated += d;
+        }
+    }
+
+    /// Process-zone tractions behind tips grown by the equation of motion (`crack/zone.rs`),
+    /// before the force-stage contact; their work is dissipated (fracture energy).
+    fn zone_forces(&mut self) {
+        if let Some(cr) = self.cracks.as_mut() {
+            let w = cr.zone_forces(
+                &self.geom,
+                &mut self.nodes,
+                &mut self.f1,
+                &self.slot_of,
+                self.dt,
+            );
+            self.dissipated += w;
         }
     }
 

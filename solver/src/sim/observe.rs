@@ -96,7 +96,23 @@ impl Simulation {
             total_error: self.kinetic + self.strain + self.dissipated
                 - self.external_work
                 - self.initial_total,
+            fracture: self.cracks.as_ref().map_or(0.0, |c| c.zone_work()),
         }
+    }
+
+    /// The fracture-energy report of the growing tips (None when no crack can grow): what
+    /// the new surface takes (Σ Γ(v)·Δa·thickness), what the process zones dissipated, and the
+    /// rest, which stayed in the body.
+    pub fn fracture_energy(&self) -> Option<fracture_api::results::FractureEnergy> {
+        let c = self.cracks.as_ref().filter(|c| c.can_grow())?;
+        let (required, new_area) = c.fracture_required();
+        let dissipated = c.zone_work();
+        Some(fracture_api::results::FractureEnergy {
+            required,
+            dissipated,
+            not_dissipated: required - dissipated,
+            new_area,
+        })
     }
 
     /// One row per crack tip now (J and K computed here, on demand).

@@ -1,0 +1,424 @@
+//! The process zone behind a tip that moves by the equation of motion (`algorithm.md` §7,
+//! "Energy"; NairnMPM's J_tip + J_zone idea): every crack point that growth creates carries a
+//! traction–separation state, and the new faces are released by a traction that falls
+//! linearly from σ_c to zero over the opening δ_c = 2Γ/σ_c, so each unit of new area takes Γ
+//! (the area under the law) out of the body instead of leaving it as waves.
+//!
+//! * Separation of a point: its two surfaces' positions (moved with their own sides' grid
+//!   velocities, `motion.rs`), δ = x_above − x_below, split into opening δ_n (along the left
+//!   normal, positive when open) and sliding δ_t; the effective separation
+//!   s = sqrt(⟨δ_n⟩² + δ_t²) couples the modes (compression is left to contact).
+//! * Law: initially rigid linear softening, σ(s) = σ_c (1 − s_max/δ_c) with s_max the largest
+//!   s reached; below s_max the traction unloads along the secant to the origin,
+//!   σ = σ(s_max)·s/s_max, so unloading creates no energy. The traction acts along the
+//!   separation (along the opening normal while s = 0).
+//! * Forces: the point's traction × its share of the crack length × thickness, spread over
+//!   the nodes of its cell with the bilinear weights, applied as an equal and opposite
+//!   impulse on the node's above and below fields at the force stage (momentum is conserved
+//!   exactly). The impulse never exceeds the one that brings the two fields to a common
+//!   velocity: a traction can stop the faces from separating but not throw them together,
+//!   which is what an initially rigid law means and keeps the explicit step stable however
+//!   light one field of a node is.
+//! * Energy: the work of the applied force over the separation of the point's surfaces,
+//!   Σ −F·Δδ (F the force of a step on the above side, Δδ the separation that step opened),
+//!   summed per point: the fracture energy, booked in `dissipated` and in `energy.csv`'s
+//!   `fracture` column. (The kinetic energy an impulse removes from the two lumped fields of
+//!   a node is not the particles' loss: a light far-side field moves fast, and that measure
+//!   booked up to twice Γ while the body lost about Γ.)
+//!
+//! The zone length l sets σ_c = sqrt(π E' Γ / (8 l)) (the length over which the LEFM opening
+//! √r profile reaches δ_c); it is a numerical parameter of the tip law (default: a third of
+//! the J domain radius, where the domain's weight is 1, so J sees the whole zone: J = J_tip +
+//! J_zone).
+
+use crate::grid::{GridGeom, Node};
+
+use super::geometry::{crosses, dist, seg_normal};
+use super::{CrackPoint, Cracks};
+
+/// Traction–separation state of one crack point.
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct Zone {
+    /// Peak traction σ_c (Pa).
+    pub strength: f64,
+    /// Toughness Γ the point takes per unit area (J/m²).
+    pub toughness: f64,
+    /// Separation at which linear softening reaches zero, δ_c = 2Γ/σ_c (m): where a point
+    /// opened monotonically fails.
+    pub critical_separation: f64,
+    /// Largest effective separation reached (m).
+    pub max_separation: f64,
+    /// Energy the point's traction has removed from the body (J, the scene's thickness):
+    /// Σ −F·Δδ, the force it applied in a step on the above side times the separation
+    /// increment of that step (negative increments, faces closing against the traction,
+    /// give energy back).
+    pub work: f64,
+    /// The largest `work` reached (J). Unloading along the secant gives energy back and
+    /// reloading takes it again.
+    pub positive_work: f64,
+    /// Γ × the point's area at the last step (J): what it takes to fail it.
+    pub capacity: f64,
+    /// Which halves of its neighbouring segments the point carries: 0 both, +1 only the one
+    /// towards the next point, −1 only the one towards the previous point (the scene's tip
+    /// point, whose other half is the original, traction-free crack).
+    pub side: i8,
+    /// Force applied on the above side in the last step (N) and the separation then (m).
+    pub(crate) last: Option<([f64; 2], [f64; 2])>,
+    /// Effective separation at the last step (NaN before the first).
+    pub(crate) prev_separation: f64,
+}
+
+impl Zone {
+    /// A fresh zone for toughness `gamma` (J/m²) and zone length `length` (m) in a medium of
+    /// modulus `e_prime` (Pa).
+    pub fn new(gamma: f64, length: f64, e_prime: f64) -> Zone {
+        let strength = (std::f64::consts::PI * e_prime * gamma / (8.0 * length)).sqrt();
+        Zone {
+            strength,
+            toughness: gamma,
+            critical_separation: 2.0 * gamma / strength,
+            max_separation: 0.0,
+            work: 0.0,
+            positive_work: 0.0,
+            capacity: 0.0,
+            side: 0,
+            last: None,
+            prev_separation: f64::NAN,
+        }
+    }
+
+    /// Whether the point carries no traction any more: opened past δ_c, or has taken its
+    /// toughness × area.
+    pub fn failed(&self) -> bool {
+        self.max_separation >= Self::TAIL * self.critical_separation
+            || (self.capacity > 0.0 && self.positive_work >= self.capacity)
+    }
+
+    /// A point opened past δ_c that has taken less than Γ × area (the explicit step and the
+    /// stick limit of its impulses lose a few per cent) keeps the tail traction
+    /// σ_c·sqrt(1 − W/(Γ·area)) (which reaches zero at a finite opening) until it has, or
+    /// until it opens past this many δ_c.
+    pub const TAIL: f64 = 3.0;
+
+    /// Damage D ∈ [0, 1]: the fraction of Γ·area taken so far.
+    pub fn damage(&self) -> f64 {
+        if self.capacity > 0.0 {
+            (self.positive_work / self.capacity).min(1.0)
+        } else {
+            0.0
+        }
+    }
+
+    /// Book a work increment (J) of the point's traction.
+    fn book(&mut self, w: f64) {
+        self.work += w;
+        self.positive_work = self.positive_work.max(self.work);
+    }
+
+    /// The law at separation `x` for a largest separation `s_max` (no update): linear
+    /// softening σ_c(1 − s_max/δ_c), the secant to the origin below s_max.
+    fn law(&self, x: f64, s_max: f64) -> f64 {
+        let s_max = s_max.max(x);
+        let d = s_max / self.critical_separation;
+        if d >= 1.0 {
+            return 0.0;
+        }
+        let peak = self.strength * (1.0 - d);
+        if x >= s_max || s_max <= 0.0 {
+            peak
+        } else {
+            peak * x / s_max
+        }
+    }
+
+    /// The traction to apply over a step that starts at separation `s` and is expected to
+    /// end near `s_next` (the last step's rate carried on): the law's mean over the interval
+    /// (midpoint rule on 8 parts, the damage following the path), so that the step's work
+    /// F·Δδ matches the law's area to second order instead of lagging it by a step. Updates
+    /// the damage with `s`; zero once the point has failed, by opening past δ_c or by having
+    /// taken Γ × its area (the second caps the explicit step's residual lag).
+    fn traction(&mut self, s: f64, s_next: f64) -> f64 {
+        if s > self.max_separation {
+            self.max_separation = s;
+        }
+        if self.failed() {
+            return 0.0;
+        }
+        if self.max_separation >= self.critical_separation {
+            // Past the law's end: the tail that takes the rest of Γ × area.
+            return if self.capacity > 0.0 {
+                self.strength * (1.0 - self.positive_work / self.capacity).max(0.0).sqrt()
+            } else {
+                0.0
+            };
+        }
+        if s_next.is_nan() || s_next <= s {
+            return self.law(s, self.max_separation);
+        }
+        let n = 8;
+        let (mut sum, mut s_max) = (0.0, self.max_separation);
+        for i in 0..n {
+            let x = s + (s_next - s) * (f64::from(i) + 0.5) / f64::from(n);
+            s_max = s_max.max(x);
+            sum += self.law(x, s_max);
+        }
+        sum / f64::from(n)
+    }
+}
+
+/// Which field of a node holds the material on one side.
+#[derive(Clone, Copy, PartialEq, Eq)]
+enum Field {
+    Zero(usize),
+    One(usize),
+}
+
+impl Cracks {
+    /// The field of node (ix, iy) that the material at `from` reaches (the crossing parity of
+    /// the line from → node, as `side_node`).
+    fn side_field(
+        &self,
+        geom: &GridGeom,
+        from: [f64; 2],
+        ix: usize,
+        iy: usize,
+        slot_of: &[u32],
+    ) -> Option<Field> {
+        let node = geom.node_pos(ix, iy);
+        let mut count = 0;
+        for &(ci, si) in self.segs_near(geom, from) {
+            let c = &self.cracks[ci as usize];
+            if crosses(from, node, c.pts[si as usize].x, c.pts[si as usize + 1].x) {
+                count += 1;
+            }
+        }
+        let idx = geom.index(ix, iy);
+        if count % 2 == 0 {
+            Some(Field::Zero(idx))
+        } else {
+            let s = *slot_of.get(idx)?;
+            (s != u32::MAX).then_some(Field::One(s as usize))
+        }
+    }
+
+    /// Process-zone tractions at the force stage (see the module doc): returns the energy
+    /// they removed in this step (J, the scene's thickness).
+    pub fn zone_forces(
+        &mut self,
+        geom: &GridGeom,
+        nodes: &mut [Node],
+        f1: &mut [Node],
+        slot_of: &[u32],
+        dt: f64,
+    ) -> f64 {
+        if !self
+            .cracks
+            .iter()
+            .any(|c| c.pts.iter().any(|p| p.zone.is_some()))
+        {
+            return 0.0;
+        }
+        let eps = 1e-3 * self.h;
+        let thickness = self.thickness;
+        let mut total = 0.0;
+        for ci in 0..self.cracks.len() {
+            let n = self.cracks[ci].pts.len();
+            for k in 0..n {
+                let c = &self.cracks[ci];
+                let Some(mut zone) = c.pts[k].zone else {
+                    continue;
+                };
+                let is_tip = (k == 0 && c.tips[0].active) || (k == n - 1 && c.tips[1].active);
+                if is_tip || n < 2 || (zone.failed() && zone.last.is_none()) {
+                    continue;
+                }
+                let pt: CrackPoint = c.pts[k];
+                // Length share: half of each neighbouring segment (only the one towards the
+                // grown side for the scene's tip point).
+                let back = if k > 0 {
+                    dist(c.pts[k - 1].x, pt.x)
+                } else {
+                    0.0
+                };
+                let fore = if k + 1 < n {
+                    dist(pt.x, c.pts[k + 1].x)
+                } else {
+                    0.0
+                };
+                let share = match zone.side {
+                    1 => 0.5 * fore,
+                    -1 => 0.5 * back,
+                    _ => 0.5 * (back + fore),
+                };
+                let (pa, pb) = if k == 0 {
+                    (c.pts[0].x, c.pts[1].x)
+                } else if k == n - 1 {
+                    (c.pts[n - 2].x, c.pts[n - 1].x)
+                } else {
+                    (c.pts[k - 1].x, c.pts[k + 1].x)
+                };
+                let nrm = seg_normal(pa, pb); // above → below
+                let up = [-nrm[0], -nrm[1]]; // left normal, towards the above side
+                let tan = [nrm[1], -nrm[0]]; // along the crack, pa → pb
+                let d = [pt.above[0] - pt.below[0], pt.above[1] - pt.below[1]];
+                // Work of last step's force over the separation it saw open since.
+                if let Some((f, d0)) = zone.last.take() {
+                    let w = -(f[0] * (d[0] - d0[0]) + f[1] * (d[1] - d0[1]));
+                    zone.book(w);
+                    total += w;
+                }
+                zone.capacity = zone.toughness * share * thickness;
+                let dn = (d[0] * up[0] + d[1] * up[1]).max(0.0);
+                let dtn = d[0] * tan[0] + d[1] * tan[1];
+                let s = dn.hypot(dtn);
+                let s_next = if zone.prev_separation.is_finite() {
+                    s + (s - zone.prev_separation)
+                } else {
+                    s
+                };
+                zone.prev_separation = s;
+                let sigma = zone.traction(s, s_next);
+                if sigma <= 0.0 || share <= 0.0 {
+                    self.cracks[ci].pts[k].zone = Some(zone);
+                    continue;
+                }
+                // Direction of the separation (the opening normal while closed).
+                let dir = if s > 1e-12 * self.h {
+                    [
+                        (dn * up[0] + dtn * tan[0]) / s,
+                        (dn * up[1] + dtn * tan[1]) / s,
+                    ]
+                } else {
+                    up
+                };
+                // Impulse on the above side: pulls it back along −dir.
+                let magnitude = sigma * share * thickness * dt;
+                // Nodes of the point's cell with both sides present, bilinear weights.
+                let xi = geom.xi(pt.x);
+                let (cx, cy) = (xi[0].floor(), xi[1].floor());
+                if cx < 0.0 || cy < 0.0 || cx as usize + 1 >= geom.nx || cy as usize + 1 >= geom.ny
+                {
+                    self.cracks[ci].pts[k].zone = Some(zone);
+                    continue;
+                }
+                let (fx, fy) = (xi[0] - cx, xi[1] - cy);
+                let (cx, cy) = (cx as usize, cy as usize);
+                let from_above = [pt.x[0] - eps * nrm[0], pt.x[1] - eps * nrm[1]];
+                let from_below = [pt.x[0] + eps * nrm[0], pt.x[1] + eps * nrm[1]];
+                let mut applied = [0.0; 2];
+                let mut pairs: Vec<(f64, Field, Field)> = Vec::with_capacity(4);
+                let mut wsum = 0.0;
+                for (a, wa) in [(0, 1.0 - fx), (1, fx)] {
+                    for (b, wb) in [(0, 1.0 - fy), (1, fy)] {
+                        let w = wa * wb;
+                        if w <= 0.0 {
+                            continue;
+                        }
+                        let (ix, iy) = (cx + a, cy + b);
+                        let fa = self.side_field(geom, from_above, ix, iy, slot_of);
+                        let fb = self.side_field(geom, from_below, ix, iy, slot_of);
+                        if let (Some(fa), Some(fb)) = (fa, fb)
+                            && fa != fb
+                        {
+                            pairs.push((w, fa, fb));
+                            wsum += w;
+                        }
+                    }
+                }
+                if wsum <= 0.0 {
+                    self.cracks[ci].pts[k].zone = Some(zone);
+                    continue;
+                }
+                for (w, fa, fb) in pairs {
+                    let want = magnitude * w / wsum;
+                    let (na, nb): (&mut Node, &mut Node) = match (fa, fb) {
+                        (Field::Zero(i), Field::One(s)) => (&mut nodes[i], &mut f1[s]),
+                        (Field::One(s), Field::Zero(i)) => (&mut f1[s], &mut nodes[i]),
+                        _ => continue,
+                    };
+                    if na.m <= 0.0 || nb.m <= 0.0 {
+                        continue;
+                    }
+                    // Force-stage momenta and the stick change of the above field.
+                    let pa_ = [na.p[0] + dt * na.f[0], na.p[1] + dt * na.f[1]];
+                    let pb_ = [nb.p[0] + dt * nb.f[0], nb.p[1] + dt * nb.f[1]];
+                    let big_m = na.m + nb.m;
+                    let stick = [
+                        (na.m * pb_[0] - nb.m * pa_[0]) / big_m,
+                        (na.m * pb_[1] - nb.m * pa_[1]) / big_m,
+                    ];
+                    // The traction pulls the above field along −dir; at most as far as the
+                    // stick change goes in that direction.
+                    let reach = -(stick[0] * dir[0] + stick[1] * dir[1]);
+                    let j = want.min(reach.max(0.0));
+                    if j <= 0.0 {
+                        continue;
+                    }
+                    let imp = [-j * dir[0], -j * dir[1]];
+                    for q in 0..2 {
+                        na.f[q] += imp[q] / dt;
+                        nb.f[q] -= imp[q] / dt;
+                        applied[q] += imp[q] / dt;
+                    }
+                }
+                zone.last = Some((applied, d));
+                self.cracks[ci].pts[k].zone = Some(zone);
+            }
+        }
+        self.zone_work += total;
+        total
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    use super::Zone;
+
+    /// A point opened monotonically in small steps, each step's work booked as the traction
+    /// at its start times the increment (as the solver does): it fails having taken Γ·area
+    /// (to the last step's increment), at the separation δ_c = 2Γ/σ_c of linear softening;
+    /// closing half-way and reopening adds no energy.
+    #[test]
+    fn law_takes_its_toughness_and_fails_at_the_critical_opening() {
+        for (gamma, len, e) in [(25.0, 2e-3, 5.9e9), (250.0, 5e-4, 2.1e11)] {
+            let mut z = Zone::new(gamma, len, e);
+            z.capacity = gamma * 1e-3; // 1 mm × 1 m
+            let dc = z.critical_separation;
+            let ds = dc / 2000.0;
+            let mut s = 0.0;
+            let mut path = Vec::new();
+            while s < 0.5 * dc {
+                s += ds;
+                path.push(s);
+            }
+            while s > 0.25 * dc {
+                s -= ds;
+                path.push(s);
+            }
+            while s < 2.0 * dc {
+                s += ds;
+                path.push(s);
+            }
+            let (mut s0, mut fail_at) = (0.0, f64::NAN);
+            let mut sigma = z.traction(0.0, ds);
+            for &x in &path {
+                z.book(sigma * 1e-3 * (x - s0));
+                if z.failed() && fail_at.is_nan() {
+                    fail_at = x;
+                }
+                sigma = z.traction(x, x + (x - s0));
+                s0 = x;
+            }
+            assert!(z.failed());
+            assert!(
+                (z.work / z.capacity - 1.0).abs() < 2e-3,
+                "work/capacity {}",
+                z.work / z.capacity
+            );
+            assert!(
+                (0.98..1.1).contains(&(fail_at / dc)),
+                "failed at {fail_at} vs δ_c {dc}"
+            );
+        }
+    }
+}
