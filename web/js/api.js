@@ -82,6 +82,7 @@ export async function listJobs({ status, label, limit = 20, cursor } = {}) {
 
 export const getJob = (id) => request('GET', `/jobs/${encodeURIComponent(id)}`);
 export const cancelJob = (id) => request('POST', `/jobs/${encodeURIComponent(id)}/cancel`);
+export const rerunJob = (id) => request('POST', `/jobs/${encodeURIComponent(id)}/rerun`);
 export const deleteJob = (id) => request('DELETE', `/jobs/${encodeURIComponent(id)}`);
 export const submitJob = (req) => request('POST', '/jobs', { body: req });
 export const listScenes = () => request('GET', '/scenes');
@@ -105,6 +106,10 @@ export function snapshotUrl(id, index, component) {
 }
 export function mcapUrl(id) {
   return `${BASE}/jobs/${encodeURIComponent(id)}/fields.mcap`;
+}
+/** The snapshots as a zipped VTK series (`fields.pvd` for ParaView). */
+export function vtkUrl(id) {
+  return `${BASE}/jobs/${encodeURIComponent(id)}/vtk.zip`;
 }
 
 /**

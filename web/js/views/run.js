@@ -5,7 +5,7 @@
 import * as api from '../api.js';
 import { Plot, PALETTE, DASHES } from '../plot.js';
 import { sceneWaveSpeeds, speedRefLines } from '../waves.js';
-import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson, orderScene } from '../util.js';
+import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson, orderScene, etaText } from '../util.js';
 import { wallTime, labelChips } from './runs.js';
 
 const TERMINAL = new Set(['completed', 'failed', 'cancelled']);
@@ -148,11 +148,14 @@ export function runView(main, { id }) {
     replace(actions,
       running ? h('button', { type: 'button', class: 'danger', id: 'cancel-run', onclick: onCancel }, 'Cancel run') : null,
       TERMINAL.has(job.status) ? h('button', { type: 'button', class: 'danger secondary', id: 'delete-run', onclick: onDelete }, 'Delete run') : null,
+      h('a', { class: 'button secondary', id: 'clone-run', href: `#/submit?from=${encodeURIComponent(id)}`, title: 'Open the scene editor with this run’s scene' }, 'Clone'),
+      h('button', { type: 'button', class: 'secondary', id: 'rerun-run', onclick: onRerun, title: 'Run the same scene again, with the same name and labels' }, 'Rerun'),
       h('a', { class: 'button secondary', href: `#/compare?ids=${encodeURIComponent(id)}` }, 'Compare…'));
     replace(messageHost, job.message && job.status !== 'completed' ? h('p', { class: job.status === 'failed' ? 'error' : 'notice' }, job.message) : null);
     renderProgress();
     replace(metaHost,
       meta('Id', h('span', { class: 'mono' }, job.id)),
+      job.rerun_of ? meta('Rerun of', h('a', { href: `#/runs/${encodeURIComponent(job.rerun_of)}`, id: 'rerun-of-link', class: 'mono' }, job.rerun_of)) : null,
       job.sweep_id ? meta('Sweep', h('a', { href: `#/sweeps/${encodeURIComponent(job.sweep_id)}`, id: 'run-sweep-link' }, 'part of a sweep: compare its runs')) : null,
       meta('Labels', labelChips(job.labels)),
       meta('Created', timeEl(job.created_at)),
@@ -170,7 +173,8 @@ export function runView(main, { id }) {
     replace(progressHost,
       h('progress', { max: 1000, value: Math.round(f * 1000), 'aria-label': 'Run progress' }),
       h('span', { class: 'muted' }, job.status === 'queued' ? 'queued, waiting for a worker' :
-        `${(f * 100).toFixed(1)} % · step ${p ? count(p.step) : '–'} · t = ${p ? si(p.sim_time, 's') : '–'} of ${p ? si(p.end_time, 's') : '–'}`));
+        `${(f * 100).toFixed(1)} % · step ${p ? count(p.step) : '–'} · t = ${p ? si(p.sim_time, 's') : '–'} of ${p ? si(p.end_time, 's') : '–'}`),
+      h('span', { class: 'muted', id: 'run-eta' }, etaText(job) ? ` · ${etaText(job)}` : ''));
   }
 
   function meta(k, v) {
@@ -185,6 +189,18 @@ export function runView(main, { id }) {
       await refreshJob();
     } catch (e) {
       notify(`Cancel failed: ${e.message}${e.status === 401 ? ' (set the API token at the top)' : ''}`, 'error');
+      ev.target.disabled = false;
+    }
+  }
+
+  async function onRerun(ev) {
+    ev.target.disabled = true;
+    try {
+      const j = await api.rerunJob(id);
+      notify(`Rerun submitted: ${j.id}`);
+      location.hash = `#/runs/${encodeURIComponent(j.id)}`;
+    } catch (e) {
+      notify(`Rerun failed: ${e.message}${e.status === 401 ? ' (set the API token at the top)' : ''}`, 'error');
       ev.target.disabled = false;
     }
   }
@@ -249,8 +265,9 @@ export function runView(main, { id }) {
       h('div', { class: 'row wrap' },
         csv('crack-tips', 'crack_tips.csv'), csv('energy', 'energy.csv'),
         h('a', { class: 'button secondary', href: api.mcapUrl(id), download: `${job.name || id}-fields.mcap` }, 'fields.mcap'),
+        h('a', { class: 'button secondary', id: 'dl-vtk', href: api.vtkUrl(id), download: `${id}-vtk.zip` }, 'ParaView (VTK)'),
         json(job.scene, 'scene.json'), json(job.summary, 'summary.json')),
-      h('p', { class: 'muted small-text' }, 'fields.mcap opens in Foxglove; while the run is going it holds what has been written so far.'));
+      h('p', { class: 'muted small-text' }, 'fields.mcap opens in Foxglove; while the run is going it holds what has been written so far. ParaView (VTK) is a zip of the field snapshots as a VTK series: open its fields.pvd (and cracks.pvd) in ParaView.'));
   }
 
   // ---- snapshots ------------------------------------------------------------------------
@@ -358,6 +375,21 @@ export function runView(main, { id }) {
     if (TERMINAL.has(status)) finish();
   }
 
+  /**
+   * A run that did not complete has no data past its last sample: end the time axis there
+   * (instead of at the scene's end time) so its curves fill the plots.
+   */
+  function fitTimeAxis() {
+    if (!job || !TERMINAL.has(job.status) || job.status === 'completed') return;
+    let last = Math.max(lastEnergy, ...lastTip.values());
+    const reached = job.summary ? Number(job.summary.sim_time) : job.progress ? Number(job.progress.sim_time) : NaN;
+    if (!(last > 0) && reached > 0) last = reached;
+    if (!(last > 0)) return;
+    const tu = timeUnit(last);
+    for (const p of plots) { p.setXUnit(tu); p.setXDomain(0, last); }
+    plotGrid.dataset.timeEnd = String(last);
+  }
+
   let finishing = false;
   async function finish() {
     if (finishing) return;
@@ -368,6 +400,7 @@ export function runView(main, { id }) {
     try {
       await refreshJob();
       await Promise.all([fillHistories(), loadSnapshots()]);
+      if (alive) fitTimeAxis();
     } catch (e) {
       if (alive) notify(`Could not load the final results: ${e.message}`, 'error');
     }
@@ -427,6 +460,7 @@ export function runView(main, { id }) {
     const end = (job.scene && job.scene.time && job.scene.time.end) || (job.progress && job.progress.end_time) || 1e-4;
     const tu = timeUnit(end);
     for (const p of plots) { p.setXUnit(tu); p.setXDomain(0, end); }
+    plotGrid.dataset.timeEnd = String(end);
     speedPlot.setRefLines(speedRefLines(speeds && speeds.speeds));
     renderHeader();
     renderSummary();
@@ -444,7 +478,7 @@ export function runView(main, { id }) {
     }
     ready = true;
     for (const f of pending.splice(0)) f();
-    if (TERMINAL.has(job.status)) finishing = true;
+    if (TERMINAL.has(job.status)) { finishing = true; fitTimeAxis(); }
   })();
 
   return () => {
