@@ -42,7 +42,7 @@ pub fn tip_stats(rows: &[CrackTipRow]) -> Vec<TipStats> {
             let mut peak_speed = f64::NAN;
             let mut peak_time = f64::NAN;
             for r in &rows {
-                if r.speed.is_finite() && !(r.speed <= peak_speed) {
+                if r.speed.is_finite() && (peak_speed.is_nan() || r.speed > peak_speed) {
                     peak_speed = r.speed;
                     peak_time = r.time;
                 }
