@@ -121,12 +121,20 @@ impl ListQuery {
                 ApiError::BadRequest(format!("bad query string: {}", e.body_text()))
             })?;
         let mut q = ListQuery::default();
+        // The message serde gave before (`bad query string: …`), now with the parameter in
+        // `details[].path`.
+        fn query_error(key: &str, what: String) -> ApiError {
+            ApiError::BadParameter {
+                message: format!("bad query string: {what}"),
+                details: vec![fracture_api::jobs::ErrorDetail {
+                    path: key.to_string(),
+                    message: what,
+                }],
+            }
+        }
         fn once(slot: &mut Option<String>, key: &str, v: String) -> Result<(), ApiError> {
             if slot.replace(v).is_some() {
-                return Err(ApiError::bad_parameter(
-                    key,
-                    format!("bad query string: duplicate field `{key}`"),
-                ));
+                return Err(query_error(key, format!("duplicate field `{key}`")));
             }
             Ok(())
         }
@@ -139,11 +147,9 @@ impl ListQuery {
                 "limit" => once(&mut limit, &k, v)?,
                 "label" => q.label.push(v),
                 _ => {
-                    return Err(ApiError::bad_parameter(
+                    return Err(query_error(
                         &k,
-                        format!(
-                            "bad query string: unknown field `{k}`, expected one of {LIST_PARAMETERS}"
-                        ),
+                        format!("unknown field `{k}`, expected one of {LIST_PARAMETERS}"),
                     ));
                 }
             }
