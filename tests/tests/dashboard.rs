@@ -686,7 +686,22 @@ async fn run_steps(c: &Client, base: &str) {
     c.execute("const s = document.getElementById('snap-component'); s.value = 'fringe'; s.dispatchEvent(new Event('change'));", vec![])
         .await
         .expect("pick the fringe field");
-    wait_js(c, "the fringe image", "const i = document.getElementById('snap-image'); return !i.hidden && i.complete && i.naturalWidth > 0 && i.src.includes('/fringe.png');", long).await;
+    let auto_width = wait_js(c, "the fringe image", "const i = document.getElementById('snap-image'); return !i.hidden && i.complete && i.naturalWidth > 0 && i.src.includes('/fringe.png') && i.naturalWidth;", long).await;
+    // the render report under it says whether every fringe is resolved
+    wait_js(c, "the fringe resolution note", "const n = document.getElementById('snap-note'); return !n.hidden && (n.dataset.aliased === 'true' ? n.textContent.includes('not resolved') : n.textContent.includes('Every fringe is resolved'));", long).await;
+    // a lower resolution (picture options in the query) gives a smaller picture
+    c.execute("const s = document.getElementById('snap-ppc'); s.value = '4'; s.dispatchEvent(new Event('change'));", vec![])
+        .await
+        .expect("pick 4 px per cell");
+    let small_width = wait_js(c, "the 4 px per cell picture", "const i = document.getElementById('snap-image'); return i.src.includes('px_per_cell=4') && i.complete && i.naturalWidth > 0 && i.naturalWidth;", long).await;
+    assert!(
+        small_width.as_u64().unwrap_or(0) < auto_width.as_u64().unwrap_or(0),
+        "4 px per cell: {small_width} px wide, auto: {auto_width}"
+    );
+    wait_js(c, "the note of the 4 px per cell picture", "const n = document.getElementById('snap-note'); return !n.hidden && n.textContent.includes('at 4 px per cell');", long).await;
+    c.execute("const s = document.getElementById('snap-ppc'); s.value = ''; s.dispatchEvent(new Event('change'));", vec![])
+        .await
+        .expect("back to the automatic resolution");
     // hover shows values
     c.execute(
         "const a = document.querySelector('#plot-speed .plot-area'); const r = a.getBoundingClientRect(); \

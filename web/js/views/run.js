@@ -275,6 +275,11 @@ export function runView(main, { id }) {
   const slider = h('input', { id: 'snap-slider', type: 'range', min: 0, max: 0, step: 1, value: 0 });
   const timeOut = h('output', { for: 'snap-slider', class: 'mono' }, '–');
   const playBtn = h('button', { type: 'button', id: 'snap-play', 'aria-pressed': 'false' }, '▶ Play');
+  const ppcSel = h('select', { id: 'snap-ppc', title: 'Pixels per grid cell of the picture' },
+    h('option', { value: '' }, 'auto'), [4, 8, 16].map((n) => h('option', { value: String(n) }, `${n} px per cell`)));
+  const snapNote = h('p', { id: 'snap-note', class: 'muted small-text', hidden: true });
+  const reports = new Map(); // report URL → promise of the render report
+  const pictureOpts = () => ({ px_per_cell: ppcSel.value });
   const img = h('img', { id: 'snap-image', class: 'snap-image', alt: '', hidden: true });
   const snapEmpty = h('p', { class: 'muted' }, 'No field snapshots yet.');
   let following = true; // slider follows the newest snapshot while live
@@ -282,9 +287,11 @@ export function runView(main, { id }) {
     h('div', { class: 'snap-controls' },
       h('div', { class: 'field' }, h('label', { for: 'snap-component' }, 'Field'), compSel),
       h('div', { class: 'field grow' }, h('label', { for: 'snap-slider' }, 'Time ', timeOut), slider),
+      h('div', { class: 'field' }, h('label', { for: 'snap-ppc' }, 'Resolution'), ppcSel),
       playBtn),
-    h('figure', { class: 'snap' }, img, snapEmpty));
+    h('figure', { class: 'snap' }, img, snapEmpty), snapNote);
   compSel.addEventListener('change', showSnapshot);
+  ppcSel.addEventListener('change', showSnapshot);
   slider.addEventListener('input', () => { following = Number(slider.value) === snapshots.length - 1; stop(); showSnapshot(); });
   playBtn.addEventListener('click', () => (playTimer ? stop() : play()));
 
@@ -316,7 +323,8 @@ export function runView(main, { id }) {
     let comp = compSel.value;
     if (!snapshotComponents(s).includes(comp)) comp = snapshotComponents(s)[0];
     if (!comp) return;
-    const url = api.snapshotUrl(id, s.index, comp);
+    const url = api.snapshotUrl(id, s.index, comp, pictureOpts());
+    showReport(s, comp);
     timeOut.textContent = `${si(s.time, 's')} (${Number(slider.value) + 1}/${snapshots.length})`;
     slider.setAttribute('aria-valuetext', `t = ${si(s.time, 's')}, snapshot ${Number(slider.value) + 1} of ${snapshots.length}`);
     if (img.dataset.src !== url) {
@@ -326,6 +334,23 @@ export function runView(main, { id }) {
     img.alt = `${COMPONENT_NAMES[comp] || comp} at t = ${si(s.time, 's')}, with its colour scale and the crack path`;
     img.hidden = false;
     snapEmpty.hidden = true;
+  }
+
+  /** Under a fringe picture: whether every fringe is resolved (the server's render report). */
+  function showReport(s, comp) {
+    if (comp !== 'fringe') { snapNote.hidden = true; delete snapNote.dataset.aliased; return; }
+    const url = api.snapshotUrl(id, s.index, comp, pictureOpts(), 'json');
+    if (!reports.has(url)) reports.set(url, api.request('GET', url.slice(api.BASE.length)).catch(() => null));
+    snapNote.dataset.for = url;
+    reports.get(url).then((r) => {
+      if (!alive || snapNote.dataset.for !== url || !r) return;
+      snapNote.dataset.aliased = String(!!r.aliased);
+      const box = r.aliased_box ? ` around x ${num(r.aliased_box[0] * 1e3, 3)}–${num(r.aliased_box[2] * 1e3, 3)} mm, y ${num(r.aliased_box[1] * 1e3, 3)}–${num(r.aliased_box[3] * 1e3, 3)} mm` : '';
+      snapNote.textContent = r.aliased
+        ? `Some fringes are finer than a pixel at ${num(r.px_per_cell, 3)} px per cell (up to ${num(r.max_fringes_per_pixel, 3)} fringes per pixel${box}): they are not resolved; a higher resolution resolves more of them.`
+        : `Every fringe is resolved at ${num(r.px_per_cell, 3)} px per cell (at most ${num(r.max_fringes_per_pixel, 3)} fringes per pixel).`;
+      snapNote.hidden = false;
+    });
   }
 
   function play() {
@@ -345,7 +370,7 @@ export function runView(main, { id }) {
         showSnapshot();
         playTimer = setTimeout(step, 500);
       };
-      next.src = api.snapshotUrl(id, snapshots[i].index, snapshotComponents(snapshots[i]).includes(compSel.value) ? compSel.value : snapshotComponents(snapshots[i])[0]);
+      next.src = api.snapshotUrl(id, snapshots[i].index, snapshotComponents(snapshots[i]).includes(compSel.value) ? compSel.value : snapshotComponents(snapshots[i])[0], pictureOpts());
     };
     playTimer = setTimeout(step, 300);
   }
