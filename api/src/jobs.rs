@@ -107,6 +107,10 @@ pub struct JobInfo {
     /// The sweep the job belongs to (extension of `api.md`; absent for a lone job).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub sweep_id: Option<String>,
+    /// The job this one reruns (`POST /api/v1/jobs/{id}/rerun`; extension of `api.md`,
+    /// absent for other jobs).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub rerun_of: Option<String>,
 }
 
 /// One problem in an error body.

@@ -5,10 +5,12 @@ use std::io::{BufRead, BufReader, Write};
 use std::time::{Duration, Instant};
 
 use fracture_api::jobs::{ErrorBody, JobInfo, JobStatus, StatusEvent};
-use fracture_api::results::Progress;
+use fracture_api::results::{CrackTipRow, Progress};
 use fracture_api::sweep::SweepInfo;
 use reqwest::StatusCode;
 use reqwest::blocking::Client;
+
+use crate::answers;
 
 /// What `fracture submit` does.
 #[derive(Debug, Clone)]
@@ -21,6 +23,9 @@ pub struct SubmitConfig {
     pub body: serde_json::Value,
     /// Follow the job until it ends.
     pub wait: bool,
+    /// With `wait`: how long to keep retrying a server that stopped answering (a restart)
+    /// before giving up.
+    pub retry_for: Duration,
 }
 
 /// Outcome of a submission.
@@ -66,7 +71,9 @@ fn post_created(
     Ok(Ok(text))
 }
 
-/// Submit a scene and, with `wait`, follow its events (falling back to polling) until it ends.
+/// Submit a scene and, with `wait`, follow its events until it ends (through a restart of
+/// the server: see [`wait_for_job`]), then print its result summary
+/// ([`crate::answers::job_summary`]) after the id.
 pub fn submit(cfg: &SubmitConfig, out: &mut dyn Write) -> anyhow::Result<SubmitOutcome> {
     let base = cfg.server.trim_end_matches('/').to_string();
     let http = http_client()?;
@@ -80,71 +87,187 @@ pub fn submit(cfg: &SubmitConfig, out: &mut dyn Write) -> anyhow::Result<SubmitO
     if !cfg.wait {
         return Ok(SubmitOutcome::Submitted(job.id));
     }
-    let id = job.id;
-    let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let job = wait_for_job(&http, &base, &job.id, cfg.retry_for)?;
+    let tips = match crack_tips(&http, &base, &job.id) {
+        Ok(rows) => answers::tip_stats(&rows),
+        Err(e) => {
+            eprintln!("{}: cannot read the crack tips: {e:#}", job.id);
+            Vec::new()
+        }
+    };
+    write!(
+        out,
+        "{}",
+        answers::job_summary(&job, &tips, &answers::dashboard_url(&base, &job.id))
+    )?;
+    Ok(SubmitOutcome::Ended(job.id, job.status, job.message))
+}
+
+/// How a read of the event stream ended.
+enum Follow {
+    /// A terminal `status` event arrived.
+    Ended,
+    /// The stream could not be opened, or it ended before the job did.
+    Dropped,
+}
+
+/// Read the job's event stream, showing progress on stderr, until a terminal `status`.
+fn follow_events(http: &Client, base: &str, id: &str, tty: bool) -> Follow {
+    let Ok(resp) = http.get(format!("{base}/api/v1/jobs/{id}/events")).send() else {
+        return Follow::Dropped;
+    };
+    if !resp.status().is_success() {
+        return Follow::Dropped;
+    }
     let mut last_line = Instant::now() - Duration::from_secs(10);
-    // Follow the SSE stream.
-    if let Ok(resp) = http.get(format!("{base}/api/v1/jobs/{id}/events")).send()
-        && resp.status().is_success()
-    {
-        let mut event = String::new();
-        let mut data = String::new();
-        for line in BufReader::new(resp).lines() {
-            let Ok(line) = line else { break };
-            if let Some(e) = line.strip_prefix("event:") {
-                event = e.trim().to_string();
-            } else if let Some(d) = line.strip_prefix("data:") {
-                data.push_str(d.trim_start());
-            } else if line.is_empty() {
-                match event.as_str() {
-                    "progress" => {
-                        if let Ok(p) = serde_json::from_str::<Progress>(&data) {
-                            let msg = format!(
-                                "{id}: step {} t = {:.3e} s ({:.0}%)",
-                                p.step,
-                                p.sim_time,
-                                100.0 * p.fraction
-                            );
-                            if tty {
-                                eprint!("\r{msg}   ");
-                            } else if last_line.elapsed() > Duration::from_secs(2) {
-                                eprintln!("{msg}");
-                                last_line = Instant::now();
-                            }
+    let mut event = String::new();
+    let mut data = String::new();
+    for line in BufReader::new(resp).lines() {
+        let Ok(line) = line else { break };
+        if let Some(e) = line.strip_prefix("event:") {
+            event = e.trim().to_string();
+        } else if let Some(d) = line.strip_prefix("data:") {
+            data.push_str(d.trim_start());
+        } else if line.is_empty() {
+            match event.as_str() {
+                "progress" => {
+                    if let Ok(p) = serde_json::from_str::<Progress>(&data) {
+                        let msg = format!(
+                            "{id}: step {} t = {:.3e} s ({:.0}%)",
+                            p.step,
+                            p.sim_time,
+                            100.0 * p.fraction
+                        );
+                        if tty {
+                            eprint!("\r{msg}   ");
+                        } else if last_line.elapsed() > Duration::from_secs(2) {
+                            eprintln!("{msg}");
+                            last_line = Instant::now();
                         }
                     }
-                    "status" => {
-                        if let Ok(s) = serde_json::from_str::<StatusEvent>(&data) {
-                            if tty {
-                                eprintln!();
-                            }
-                            eprintln!("{id}: {}", s.status.as_str());
-                            if s.status.is_terminal() {
-                                return Ok(SubmitOutcome::Ended(id, s.status, s.message));
-                            }
-                        }
-                    }
-                    _ => {}
                 }
-                event.clear();
-                data.clear();
+                "status" => {
+                    if let Ok(s) = serde_json::from_str::<StatusEvent>(&data) {
+                        if tty {
+                            eprintln!();
+                        }
+                        eprintln!("{id}: {}", s.status.as_str());
+                        if s.status.is_terminal() {
+                            return Follow::Ended;
+                        }
+                    }
+                }
+                _ => {}
             }
+            event.clear();
+            data.clear();
         }
     }
-    // The stream ended early (server restart?): poll.
+    if tty {
+        eprintln!();
+    }
+    Follow::Dropped
+}
+
+/// The job document: `Ok(None)` for a 404, an error when the server does not answer (or
+/// answers with something else).
+fn get_job(http: &Client, base: &str, id: &str) -> anyhow::Result<Option<JobInfo>> {
+    let r = http
+        .get(format!("{base}/api/v1/jobs/{id}"))
+        .timeout(Duration::from_secs(30))
+        .send()?;
+    if r.status() == StatusCode::NOT_FOUND {
+        return Ok(None);
+    }
+    if !r.status().is_success() {
+        anyhow::bail!("GET /api/v1/jobs/{id} answered {}", r.status());
+    }
+    Ok(Some(r.json::<JobInfo>()?))
+}
+
+/// The job's crack-tip rows.
+fn crack_tips(http: &Client, base: &str, id: &str) -> anyhow::Result<Vec<CrackTipRow>> {
+    let r = http
+        .get(format!("{base}/api/v1/jobs/{id}/crack-tips"))
+        .timeout(Duration::from_secs(60))
+        .send()?;
+    if !r.status().is_success() {
+        anyhow::bail!("GET /api/v1/jobs/{id}/crack-tips answered {}", r.status());
+    }
+    Ok(r.json::<Vec<CrackTipRow>>()?)
+}
+
+/// First pause between retries of an unreachable server; it doubles up to [`MAX_BACKOFF`].
+const FIRST_BACKOFF: Duration = Duration::from_millis(500);
+/// Longest pause between retries.
+const MAX_BACKOFF: Duration = Duration::from_secs(8);
+
+/// Follow a job until it has ended and return its final document. The event stream shows
+/// progress; when it drops (a restart of the server, a network fault) the job is polled,
+/// and while the server does not answer the connection is retried with exponential backoff
+/// (0.5 s doubling to 8 s) for at most `retry_for` from the first failure, each retry said
+/// on stderr. Then the stream is opened again.
+pub fn wait_for_job(
+    http: &Client,
+    base: &str,
+    id: &str,
+    retry_for: Duration,
+) -> anyhow::Result<JobInfo> {
+    let tty = std::io::IsTerminal::is_terminal(&std::io::stderr());
+    let mut outage: Option<(Instant, String)> = None;
+    let mut backoff = FIRST_BACKOFF;
     loop {
-        let r = http
-            .get(format!("{base}/api/v1/jobs/{id}"))
-            .timeout(Duration::from_secs(30))
-            .send();
-        if let Ok(r) = r
-            && r.status().is_success()
-            && let Ok(j) = r.json::<JobInfo>()
-            && j.status.is_terminal()
-        {
-            return Ok(SubmitOutcome::Ended(id, j.status, j.message));
+        let followed = if outage.is_none() {
+            follow_events(http, base, id, tty)
+        } else {
+            Follow::Dropped
+        };
+        match get_job(http, base, id) {
+            Ok(Some(job)) => {
+                if let Some((since, _)) = outage.take() {
+                    eprintln!(
+                        "{id}: reconnected to {base} after {:.1} s; following the job again",
+                        since.elapsed().as_secs_f64()
+                    );
+                }
+                backoff = FIRST_BACKOFF;
+                if job.status.is_terminal() {
+                    return Ok(job);
+                }
+                if matches!(followed, Follow::Ended) {
+                    // The stream said it ended but the document does not yet: look again.
+                    std::thread::sleep(Duration::from_millis(200));
+                } else {
+                    // The stream dropped while the server answers: reopen it after a pause.
+                    std::thread::sleep(FIRST_BACKOFF);
+                }
+            }
+            Ok(None) => {
+                anyhow::bail!("job {id} is no longer on the server at {base} (deleted?)")
+            }
+            Err(e) => {
+                let (since, _) = outage.get_or_insert_with(|| (Instant::now(), e.to_string()));
+                let waited = since.elapsed();
+                if waited >= retry_for {
+                    anyhow::bail!(
+                        "the server at {base} has not answered for {:.0} s (last error: {e:#}); \
+                         job {id} may still run there: see {}",
+                        waited.as_secs_f64(),
+                        answers::dashboard_url(base, id)
+                    );
+                }
+                let pause = backoff.min(retry_for.saturating_sub(waited));
+                eprintln!(
+                    "{id}: the server at {base} does not answer ({e:#}); retrying in {:.1} s \
+                     (giving up {:.0} s after the first failure, {:.0} s so far)",
+                    pause.as_secs_f64(),
+                    retry_for.as_secs_f64(),
+                    waited.as_secs_f64()
+                );
+                std::thread::sleep(pause);
+                backoff = (backoff * 2).min(MAX_BACKOFF);
+            }
         }
-        std::thread::sleep(Duration::from_secs(1));
     }
 }
 
@@ -201,7 +324,8 @@ pub fn sweep_line(s: &SweepInfo) -> String {
 }
 
 /// Create a sweep (`POST /api/v1/sweeps`), print its id and one line per job (`id label`)
-/// and, with `wait`, poll it until every job has ended, showing progress on stderr.
+/// and, with `wait`, poll it until every job has ended, showing progress on stderr, then
+/// print one table row per combination ([`crate::answers::sweep_table`]).
 pub fn sweep(cfg: &SweepConfig, out: &mut dyn Write) -> anyhow::Result<SweepOutcome> {
     use SweepInfo;
     let base = cfg.server.trim_end_matches('/').to_string();
@@ -259,19 +383,39 @@ pub fn sweep(cfg: &SweepConfig, out: &mut dyn Write) -> anyhow::Result<SweepOutc
                     if tty {
                         eprintln!();
                     }
+                    let mut peaks = std::collections::BTreeMap::new();
                     for j in s.jobs.iter().flatten() {
-                        let why = j
-                            .message
-                            .as_deref()
-                            .map(|m| format!(": {m}"))
-                            .unwrap_or_default();
-                        eprintln!("  {} {} [{}]{why}", j.id, j.status.as_str(), j.label);
+                        if let Some(m) = j.message.as_deref().filter(|m| !m.is_empty()) {
+                            eprintln!("  {} {} [{}]: {m}", j.id, j.status.as_str(), j.label);
+                        }
+                        match crack_tips(&http, &base, &j.id) {
+                            Ok(rows) => {
+                                peaks.insert(
+                                    j.id.clone(),
+                                    answers::peak_speed(&answers::tip_stats(&rows)),
+                                );
+                            }
+                            Err(e) => eprintln!("{}: cannot read the crack tips: {e:#}", j.id),
+                        }
                     }
+                    // A blank line ends the job list; the table follows.
+                    write!(out, "\n{}", answers::sweep_table(&s, &peaks))?;
+                    writeln!(
+                        out,
+                        "dashboard: {}",
+                        answers::sweep_dashboard_url(&base, &id)
+                    )?;
                     return Ok(SweepOutcome::Ended(id, Box::new(s)));
                 }
             }
             None => {
                 failures += 1;
+                if failures == 1 {
+                    eprintln!(
+                        "{id}: the server at {base} does not answer; retrying every second \
+                         (giving up after two minutes)"
+                    );
+                }
                 if failures > 120 {
                     anyhow::bail!("the server has not answered for two minutes");
                 }

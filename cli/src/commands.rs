@@ -59,9 +59,14 @@ pub struct SubmitArgs {
     /// Label `key=value` (repeatable).
     #[arg(long = "label")]
     pub labels: Vec<String>,
-    /// Show progress and exit with the job's outcome (0 completed, 3 failed, 4 cancelled).
+    /// Show progress and exit with the job's outcome (0 completed, 3 failed, 4 cancelled),
+    /// after a result summary on stdout.
     #[arg(long)]
     pub wait: bool,
+    /// With `--wait`: how long to keep retrying a server that stopped answering (e.g. while
+    /// it restarts), in seconds, before giving up (exit 1).
+    #[arg(long, default_value_t = 120)]
+    pub retry_seconds: u64,
 }
 
 /// Arguments of `fracture sweep`.
@@ -297,6 +302,7 @@ pub fn submit(a: SubmitArgs) -> ExitCode {
         token: a.token,
         body,
         wait: a.wait,
+        retry_for: Duration::from_secs(a.retry_seconds),
     };
     let mut out = std::io::stdout();
     match client::submit(&cfg, &mut out) {

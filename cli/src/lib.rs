@@ -3,6 +3,7 @@
 //! HTTP [`client`]). `serve` is `fracture_server::service`; `bench` and `study` are
 //! `fracture_lab`.
 
+pub mod answers;
 pub mod client;
 pub mod commands;
 pub mod local;

@@ -135,8 +135,36 @@ fn progress_bar(steps: u64) -> Option<ProgressBar> {
     Some(bar)
 }
 
-/// `fracture run`.
-pub fn run(scene: &Path, out: &Path, threads: Parallelism) -> ExitCode {
+/// Folder of the VTK series under a run directory (`fracture run --vtk`).
+pub const VTK_DIR: &str = "vtk";
+
+/// `fracture run --vtk`: the run's snapshots (what `fields.mcap` holds, also of a failed or
+/// cancelled run) as a VTK series in `OUT/vtk/`. Reports on stdout/stderr; false on failure.
+fn export_vtk(out: &Path) -> bool {
+    let mcap = out.join(fracture_worker::local::FIELDS_FILE);
+    let dir = out.join(VTK_DIR);
+    match fracture_results::vtk::export_mcap(&mcap, &dir) {
+        Ok(series) => {
+            println!(
+                "VTK series in {} ({} files; open {} in ParaView)",
+                dir.display(),
+                series.files.len(),
+                series.fields_pvd.display()
+            );
+            true
+        }
+        Err(e) => {
+            eprintln!(
+                "error: cannot write the VTK series to {}: {e}",
+                dir.display()
+            );
+            false
+        }
+    }
+}
+
+/// `fracture run`; with `vtk`, also the VTK series of its snapshots (`OUT/vtk/`).
+pub fn run(scene: &Path, out: &Path, threads: Parallelism, vtk: bool) -> ExitCode {
     let scene = match load_scene(scene) {
         Ok(s) => s,
         Err(e) => return e.report(),
@@ -180,6 +208,7 @@ pub fn run(scene: &Path, out: &Path, threads: Parallelism) -> ExitCode {
         interrupted,
     };
     let summary = run_scene(&scene, &opts, &mut sink);
+    let vtk_ok = !vtk || export_vtk(out);
     let message = summary.message.as_deref().unwrap_or("");
     match summary.status {
         RunStatus::Completed => {
@@ -193,7 +222,11 @@ pub fn run(scene: &Path, out: &Path, threads: Parallelism) -> ExitCode {
                 summary.particle_steps_per_second
             );
             println!("results in {}", out.display());
-            ExitCode::SUCCESS
+            if vtk_ok {
+                ExitCode::SUCCESS
+            } else {
+                ExitCode::from(EXIT_ERROR)
+            }
         }
         RunStatus::Failed if sink.output_failed => {
             eprintln!("error: {message}");

@@ -37,6 +37,10 @@ enum Command {
         /// Solver threads (`all` or 0: one per core).
         #[arg(long, default_value = "all")]
         threads: fracture_solver::Parallelism,
+        /// Also write the field snapshots as a VTK series for ParaView under `OUT/vtk/`
+        /// (open `OUT/vtk/fields.pvd`; docs/vtk.md).
+        #[arg(long)]
+        vtk: bool,
     },
     /// Validate a scene and print the size of the run.
     Validate {
@@ -64,7 +68,8 @@ fn main() -> ExitCode {
             scene,
             out,
             threads,
-        }) => local::run(&scene, &out, threads),
+            vtk,
+        }) => local::run(&scene, &out, threads, vtk),
         Some(Command::Validate { scene }) => local::validate(&scene),
         Some(Command::Schema) => local::schema(),
         Some(Command::Bench(a)) => fracture_lab::bench(a),

@@ -261,6 +261,56 @@ fn run_writes_the_four_files() {
 }
 
 #[test]
+fn run_with_vtk_writes_a_paraview_series() {
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(dir.path(), "scene.json", &tiny().to_string());
+    let out = dir.path().join("out");
+    let o = fracture(&[
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--threads",
+        "1",
+        "--vtk",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(stdout(&o).contains("fields.pvd"), "{}", stdout(&o));
+    let snaps = fracture_results::mcapfile::read_snapshots(out.join("fields.mcap")).unwrap();
+    assert!(!snaps.is_empty());
+    let vtk = out.join("vtk");
+    let pvd = std::fs::read_to_string(vtk.join("fields.pvd")).unwrap();
+    assert!(vtk.join("cracks.pvd").is_file());
+    // One grid file per snapshot, each named in the collection with its time.
+    let mut grids: Vec<String> = std::fs::read_dir(&vtk)
+        .unwrap()
+        .filter_map(|e| e.ok()?.file_name().into_string().ok())
+        .filter(|n| n.ends_with(".vti"))
+        .collect();
+    grids.sort();
+    assert_eq!(grids.len(), snaps.len(), "{grids:?}");
+    for (g, s) in grids.iter().zip(&snaps) {
+        assert!(pvd.contains(&format!("file=\"{g}\"")), "{g} not in {pvd}");
+        let text = std::fs::read_to_string(vtk.join(g)).unwrap();
+        assert!(text.contains("<ImageData"), "{g}");
+        let stamp = format!("timestep=\"{:e}\"", s.time);
+        assert!(pvd.contains(&stamp), "{stamp} not in {pvd}");
+    }
+    // Without --vtk there is no vtk folder.
+    let out2 = dir.path().join("out2");
+    let o = fracture(&[
+        "run",
+        file.to_str().unwrap(),
+        "--out",
+        out2.to_str().unwrap(),
+        "--threads",
+        "1",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    assert!(!out2.join("vtk").exists());
+}
+
+#[test]
 fn impact_bar_runs() {
     let dir = tempfile::tempdir().unwrap();
     let out = dir.path().join("out");

@@ -20,6 +20,15 @@ pub enum ApiError {
     /// 400: the body is not JSON, or a parameter is malformed.
     #[error("{0}")]
     BadRequest(String),
+    /// 400: a query parameter has a bad value; each detail names the parameter (`path`) and
+    /// what is wrong with its value.
+    #[error("{message}")]
+    BadParameter {
+        /// The first problem, naming the parameter and its value.
+        message: String,
+        /// One entry per bad parameter.
+        details: Vec<ErrorDetail>,
+    },
     /// 422: the scene is not valid.
     #[error("the scene is not valid")]
     InvalidScene(Vec<ErrorDetail>),
@@ -94,10 +103,22 @@ impl ApiError {
         }
     }
 
+    /// 400 for the query parameter `name`: `message` says what is wrong with its value.
+    pub fn bad_parameter(name: &str, message: impl Into<String>) -> Self {
+        let message = message.into();
+        ApiError::BadParameter {
+            message: format!("query parameter `{name}`: {message}"),
+            details: vec![ErrorDetail {
+                path: name.to_string(),
+                message,
+            }],
+        }
+    }
+
     /// The status code of this error.
     pub fn status(&self) -> StatusCode {
         match self {
-            ApiError::BadRequest(_) => StatusCode::BAD_REQUEST,
+            ApiError::BadRequest(_) | ApiError::BadParameter { .. } => StatusCode::BAD_REQUEST,
             ApiError::InvalidScene(_)
             | ApiError::LimitExceeded { .. }
             | ApiError::InvalidSweep { .. } => StatusCode::UNPROCESSABLE_ENTITY,
@@ -118,6 +139,7 @@ impl ApiError {
     pub fn body(&self) -> ErrorBody {
         let (kind, details) = match self {
             ApiError::BadRequest(_) => ("bad_request", vec![]),
+            ApiError::BadParameter { details, .. } => ("bad_request", details.clone()),
             ApiError::InvalidScene(d) => ("invalid_scene", d.clone()),
             ApiError::LimitExceeded { details, .. } => ("limit_exceeded", details.clone()),
             ApiError::InvalidSweep { details, .. } => ("invalid_sweep", details.clone()),

@@ -27,6 +27,8 @@ pub struct AppState {
     pub queue_changed: Arc<Notify>,
     /// `true` once the server is shutting down (ends SSE streams and long polls).
     pub shutdown: watch::Receiver<bool>,
+    /// Particle counts of running jobs, for `GET /metrics`.
+    pub particles: Arc<crate::http::metrics::ParticleCache>,
 }
 
 impl AppState {
@@ -41,6 +43,7 @@ impl AppState {
                 files,
                 queue_changed: Arc::new(Notify::new()),
                 shutdown: rx,
+                particles: Arc::default(),
             },
             tx,
         )

@@ -169,6 +169,8 @@ async fn unknown_ids_are_404() {
         "/api/v1/jobs/nope/snapshots",
         "/api/v1/jobs/nope/snapshots/0/sxx.png",
         "/api/v1/jobs/nope/fields.mcap",
+        "/api/v1/jobs/nope/vtk.zip",
+        "/api/v1/jobs/nope/snapshots/0/sxx.json",
         "/api/v1/jobs/nope/events",
         "/api/v1/nothing-here",
     ] {
@@ -178,6 +180,73 @@ async fn unknown_ids_are_404() {
     }
     let (s, _) = call(&st, get("/api/v1/jobs?status=sleeping")).await;
     assert_eq!(s, StatusCode::BAD_REQUEST);
+}
+
+/// Issue 20 routes without a socket: rerun (token, 404, `rerun_of`), the list's `q` and
+/// repeated `label`, and 400s that name the query parameter.
+#[tokio::test]
+async fn rerun_search_and_parameter_errors() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), Some("tok")).await;
+    let body = json!({"scene": scene(), "labels": {"a": "1", "b": "2"}}).to_string();
+    let (s, job) = call(&st, post("/api/v1/jobs", body, Some("tok"))).await;
+    assert_eq!(s, StatusCode::CREATED, "{job}");
+    let id = job["id"].as_str().unwrap().to_string();
+    let rerun = format!("/api/v1/jobs/{id}/rerun");
+    let (s, v) = call(&st, post(&rerun, "", None)).await;
+    assert_eq!(s, StatusCode::UNAUTHORIZED);
+    assert_error_body(&v, "unauthorized");
+    let (s, v) = call(&st, post("/api/v1/jobs/nope/rerun", "", Some("tok"))).await;
+    assert_eq!(s, StatusCode::NOT_FOUND);
+    assert_error_body(&v, "not_found");
+    let (s, r) = call(&st, post(&rerun, "", Some("tok"))).await;
+    assert_eq!(s, StatusCode::CREATED, "{r}");
+    assert_eq!(r["rerun_of"], id.as_str());
+    assert_eq!(r["labels"], job["labels"]);
+    assert_eq!(r["name"], "unit");
+    assert_eq!(r["scene"], job["scene"]);
+    let (_, again) = call(
+        &st,
+        get(&format!("/api/v1/jobs/{}", r["id"].as_str().unwrap())),
+    )
+    .await;
+    assert_eq!(again["rerun_of"], id.as_str());
+    // Both jobs match `q` (any case) and both labels; a third label value matches none.
+    let (s, list) = call(&st, get("/api/v1/jobs?q=UNI&label=a:1&label=b:2")).await;
+    assert_eq!(s, StatusCode::OK);
+    assert_eq!(list.as_array().map(Vec::len), Some(2), "{list}");
+    let (_, list) = call(&st, get("/api/v1/jobs?label=a:1&label=b:3")).await;
+    assert_eq!(list.as_array().map(Vec::len), Some(0), "{list}");
+    let (_, list) = call(&st, get("/api/v1/jobs?q=zzz")).await;
+    assert_eq!(list.as_array().map(Vec::len), Some(0), "{list}");
+    for (uri, param) in [
+        ("/api/v1/jobs?unknown=1", "unknown"),
+        ("/api/v1/jobs?cursor=1&cursor=2", "cursor"),
+        ("/api/v1/jobs?limit=x", "limit"),
+    ] {
+        let (s, v) = call(&st, get(uri)).await;
+        assert_eq!(s, StatusCode::BAD_REQUEST, "{uri}");
+        assert_error_body(&v, "bad_request");
+        assert_eq!(v["details"][0]["path"], param, "{uri}: {v}");
+    }
+    // Picture options are checked before the job is looked up.
+    let (s, v) = call(
+        &st,
+        get(&format!("/api/v1/jobs/{id}/snapshots/0/sxx.png?width=-3")),
+    )
+    .await;
+    assert_eq!(s, StatusCode::BAD_REQUEST);
+    assert_eq!(v["details"][0]["path"], "width", "{v}");
+    // A queued job has no snapshots: the zip is a 404 saying so.
+    let (s, v) = call(&st, get(&format!("/api/v1/jobs/{id}/vtk.zip"))).await;
+    assert_eq!(s, StatusCode::NOT_FOUND);
+    assert!(
+        v["message"]
+            .as_str()
+            .unwrap()
+            .contains("no field snapshots yet"),
+        "{v}"
+    );
 }
 
 #[tokio::test]

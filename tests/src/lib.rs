@@ -65,6 +65,8 @@ pub struct Server {
     /// Its data folder.
     pub data: PathBuf,
     args: Vec<String>,
+    /// `--bind` of the next launch.
+    bind: String,
     /// HTTP client for tests.
     pub http: reqwest::blocking::Client,
 }
@@ -80,6 +82,7 @@ impl Server {
             url: String::new(),
             data: data.to_path_buf(),
             args,
+            bind: "127.0.0.1:0".into(),
             http: reqwest::blocking::Client::builder()
                 .timeout(Duration::from_secs(30))
                 .build()
@@ -100,7 +103,7 @@ impl Server {
         let child = Command::new(fracture_bin())
             .arg("serve")
             .arg("--bind")
-            .arg("127.0.0.1:0")
+            .arg(&self.bind)
             .arg("--data")
             .arg(&self.data)
             .args(&self.args)
@@ -161,6 +164,20 @@ impl Server {
     pub fn restart(&mut self) {
         self.stop();
         self.launch();
+    }
+
+    /// Start again on the same data folder and the same port (clients that retry their
+    /// connection find it again), after `pause` with no server.
+    pub fn restart_on_same_port(&mut self, pause: Duration) {
+        self.stop();
+        std::thread::sleep(pause);
+        self.bind = self
+            .url
+            .strip_prefix("http://")
+            .unwrap_or("127.0.0.1:0")
+            .to_string();
+        self.launch();
+        self.bind = "127.0.0.1:0".into();
     }
 
     /// Full URL of an API path.

@@ -453,6 +453,32 @@ async fn run_steps(c: &Client, base: &str) {
         "no built-in example scenes offered"
     );
 
+    // 2-. picking another example replaces the previous one's name and description
+    //     (issue 20): the editor and the description line follow the pick
+    if examples.as_u64().unwrap_or(0) >= 2 {
+        let switched = c
+            .execute_async(
+                "const done = arguments[arguments.length - 1]; \
+                 const sel = document.getElementById('example'); \
+                 const names = [...sel.options].map(o => o.value).filter(v => v); \
+                 const other = names.find(n => n !== sel.value); \
+                 fetch('/api/v1/scenes').then(r => r.json()).then(list => { \
+                   const want = list.find(s => s.name === other); \
+                   sel.value = other; sel.dispatchEvent(new Event('change')); \
+                   const got = JSON.parse(document.getElementById('scene-json').value); \
+                   done({ want_name: want.scene.name || want.name, got_name: got.name, \
+                          want_desc: want.scene.description ?? null, got_desc: got.description ?? null, \
+                          shown: document.getElementById('example-desc').textContent, listed: want.description || '' }); \
+                 }).catch(e => done({ error: String(e) }));",
+                vec![],
+            )
+            .await
+            .expect("switch the example");
+        assert_eq!(switched["got_name"], switched["want_name"], "{switched}");
+        assert_eq!(switched["got_desc"], switched["want_desc"], "{switched}");
+        assert_eq!(switched["shown"], switched["listed"], "{switched}");
+    }
+
     // 2a. a mistake is listed with its path and marked at its line
     let mut bad = small_scene("e2e-crack-a", 5.0, 0.0005);
     bad["materials"]["plate"]["poissons_ratio"] = json!(0.7);
@@ -604,6 +630,50 @@ async fn run_steps(c: &Client, base: &str) {
             "speed plot lacks {label}: {refs}"
         );
     }
+    // the reference labels never overlap (c_R and c_S are 7 % apart: staggered)
+    let overlaps = c
+        .execute(
+            "const r = [...document.querySelectorAll('#plot-speed .ref-label text')].map(t => [t.textContent, t.getBoundingClientRect()]); \
+             const out = []; \
+             for (let i = 0; i < r.length; i++) for (let j = i + 1; j < r.length; j++) { \
+               const a = r[i][1], b = r[j][1]; \
+               if (a.left < b.right && b.left < a.right && a.top < b.bottom && b.top < a.bottom) out.push(r[i][0] + ' / ' + r[j][0]); } \
+             return out.join(', ');",
+            vec![],
+        )
+        .await
+        .expect("reference label boxes");
+    assert_eq!(overlaps, json!(""), "overlapping reference labels");
+    // the tip position / crack length plot, next to the speed plot
+    wait_js(
+        c,
+        "the crack-tip position and length curves",
+        "const g = [...document.querySelectorAll('#plots-h + .plot-grid > figure')].map(f => f.id); \
+         return g.indexOf('plot-position') === g.indexOf('plot-speed') + 1 && \
+           document.querySelectorAll('#plot-position .series path').length >= 1 && \
+           [...document.querySelectorAll('#plot-position .legend-item')].some(b => b.textContent.includes('length'));",
+        long,
+    )
+    .await;
+    // the ParaView download: a zip with a .pvd
+    let vtk = c
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             const a = document.getElementById('dl-vtk'); \
+             if (!a) { done('no link'); return; } \
+             fetch(a.href).then(r => r.arrayBuffer().then(b => { \
+               const text = new TextDecoder('latin1').decode(new Uint8Array(b)); \
+               done(a.textContent + '|' + r.status + '|' + r.headers.get('content-type') + '|' + text.includes('fields.pvd') + '|' + text.startsWith('PK')); \
+             })).catch(e => done('ERR ' + e));",
+            vec![],
+        )
+        .await
+        .expect("fetch the VTK zip");
+    assert_eq!(
+        vtk,
+        json!("ParaView (VTK)|200|application/zip|true|true"),
+        "VTK download"
+    );
     wait_js(
         c,
         "the energy curves",
@@ -616,7 +686,22 @@ async fn run_steps(c: &Client, base: &str) {
     c.execute("const s = document.getElementById('snap-component'); s.value = 'fringe'; s.dispatchEvent(new Event('change'));", vec![])
         .await
         .expect("pick the fringe field");
-    wait_js(c, "the fringe image", "const i = document.getElementById('snap-image'); return !i.hidden && i.complete && i.naturalWidth > 0 && i.src.includes('/fringe.png');", long).await;
+    let auto_width = wait_js(c, "the fringe image", "const i = document.getElementById('snap-image'); return !i.hidden && i.complete && i.naturalWidth > 0 && i.src.includes('/fringe.png') && i.naturalWidth;", long).await;
+    // the render report under it says whether every fringe is resolved
+    wait_js(c, "the fringe resolution note", "const n = document.getElementById('snap-note'); return !n.hidden && (n.dataset.aliased === 'true' ? n.textContent.includes('not resolved') : n.textContent.includes('Every fringe is resolved'));", long).await;
+    // a lower resolution (picture options in the query) gives a smaller picture
+    c.execute("const s = document.getElementById('snap-ppc'); s.value = '4'; s.dispatchEvent(new Event('change'));", vec![])
+        .await
+        .expect("pick 4 px per cell");
+    let small_width = wait_js(c, "the 4 px per cell picture", "const i = document.getElementById('snap-image'); return i.src.includes('px_per_cell=4') && i.complete && i.naturalWidth > 0 && i.naturalWidth;", long).await;
+    assert!(
+        small_width.as_u64().unwrap_or(0) < auto_width.as_u64().unwrap_or(0),
+        "4 px per cell: {small_width} px wide, auto: {auto_width}"
+    );
+    wait_js(c, "the note of the 4 px per cell picture", "const n = document.getElementById('snap-note'); return !n.hidden && n.textContent.includes('at 4 px per cell');", long).await;
+    c.execute("const s = document.getElementById('snap-ppc'); s.value = ''; s.dispatchEvent(new Event('change'));", vec![])
+        .await
+        .expect("back to the automatic resolution");
     // hover shows values
     c.execute(
         "const a = document.querySelector('#plot-speed .plot-area'); const r = a.getBoundingClientRect(); \
@@ -670,6 +755,54 @@ async fn run_steps(c: &Client, base: &str) {
     .expect("scroll to the top");
     screenshot(c, "run.png", 1280, 3000).await;
     c.set_window_size(1280, 900).await.expect("resize window");
+
+    // 3b. Clone opens the scene editor with this run's scene; Rerun makes a linked run
+    click(c, "#clone-run").await;
+    let cloned = wait_js(
+        c,
+        "the editor with the run's scene",
+        "const t = document.getElementById('scene-json'); \
+         if (!location.hash.startsWith('#/submit?from=') || !t || t.value.length < 10) return false; \
+         try { return JSON.parse(t.value).name; } catch (e) { return false; }",
+        long,
+    )
+    .await;
+    assert_eq!(cloned, json!("e2e-crack-a"), "cloned scene");
+    c.goto(&format!("{base}/#/runs/{id_a}"))
+        .await
+        .expect("back to run A");
+    wait_js(
+        c,
+        "run A's page",
+        "return !!document.getElementById('rerun-run');",
+        long,
+    )
+    .await;
+    click(c, "#rerun-run").await;
+    let rerun = wait_js(
+        c,
+        "the rerun's page",
+        &format!("const h = location.hash; return h.startsWith('#/runs/') && h !== '#/runs/{id_a}' && document.getElementById('rerun-of-link')?.textContent === '{id_a}' && h;"),
+        long,
+    )
+    .await;
+    let rerun_id = rerun
+        .as_str()
+        .unwrap_or_default()
+        .trim_start_matches("#/runs/")
+        .to_string();
+    wait_js(
+        c,
+        "the rerun completed",
+        "return document.querySelector('.badge-host .badge')?.textContent === 'completed';",
+        RUN_TIMEOUT,
+    )
+    .await;
+    assert_no_console_errors(c, "clone and rerun").await;
+    // (deleted so the list and compare steps below see the two runs they expect)
+    click(c, "#delete-run").await;
+    c.accept_alert().await.expect("confirm the deletion");
+    wait_js(c, "back on the list after deleting the rerun", &format!("return location.hash === '#/runs' && document.querySelector('.table-host')?.getAttribute('aria-busy') === 'false' && !document.querySelector('tr[data-id=\"{rerun_id}\"]');"), long).await;
 
     // 4. the list shows both runs; select them and compare
     click(c, "a[data-nav=runs]").await;
@@ -755,6 +888,16 @@ async fn run_steps(c: &Client, base: &str) {
     c.goto(&format!("{base}/#/runs/{long_id}"))
         .await
         .expect("open the long run");
+    // running: an ETA from the progress so far, and samples on the plots
+    let eta = wait_js(
+        c,
+        "the ETA of the running run",
+        "const e = document.getElementById('run-eta')?.textContent || ''; \
+         return e.includes('left') && document.querySelectorAll('#plot-energy .series path').length > 0 && e;",
+        RUN_TIMEOUT,
+    )
+    .await;
+    eprintln!("running run: {eta}");
     click(c, "#cancel-run").await;
     wait_js(
         c,
@@ -763,6 +906,15 @@ async fn run_steps(c: &Client, base: &str) {
         long,
     )
     .await;
+    // cancelled: the time axis ends at the last sample, not at the scene's end (1e-4 s)
+    let end = wait_js(
+        c,
+        "the time axis fitted to the samples",
+        "const e = Number(document.querySelector('.plot-grid')?.dataset.timeEnd); return e > 0 && e < 1e-4 && e;",
+        long,
+    )
+    .await;
+    eprintln!("cancelled run: time axis ends at {end} s");
     click(c, "#delete-run").await;
     c.accept_alert().await.expect("confirm the deletion");
     wait_js(c, "back on the list", "return location.hash.startsWith('#/runs') && !location.hash.startsWith('#/runs/') && document.querySelector('.table-host')?.getAttribute('aria-busy') === 'false';", long).await;
@@ -826,6 +978,28 @@ async fn run_steps(c: &Client, base: &str) {
     assert!(
         legend.contains("toughness=5") && legend.contains("toughness=20"),
         "sweep legend: {legend}"
+    );
+    // the legend lists the runs in the table's order
+    let order = c
+        .execute(
+            "const rows = [...document.querySelectorAll('table.sweep-jobs tbody tr td[data-label=Parameters]')].map(td => td.textContent); \
+             const items = [...document.querySelectorAll('#sweep-speed .legend-item')].map(b => b.textContent); \
+             const first = items.map(t => rows.findIndex(r => t.includes(r))); \
+             return JSON.stringify({rows, items, first});",
+            vec![],
+        )
+        .await
+        .expect("legend and table order");
+    let order: Value = serde_json::from_str(order.as_str().unwrap_or("{}")).unwrap_or(Value::Null);
+    let first: Vec<i64> = order["first"]
+        .as_array()
+        .map(|a| a.iter().filter_map(Value::as_i64).collect())
+        .unwrap_or_default();
+    assert!(
+        !first.is_empty()
+            && first.iter().all(|&i| i >= 0)
+            && first.windows(2).all(|w| w[0] <= w[1]),
+        "legend order differs from the table's: {order}"
     );
     let refs = c
         .execute("return [...document.querySelectorAll('#sweep-speed .ref-label text')].map(t => t.textContent).join('|');", vec![])

@@ -134,11 +134,19 @@ fn rosakis_mini_toughness_sweep_through_the_service() {
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
     assert_eq!(code, Some(0), "fracture sweep --wait:\n{stdout}\n{stderr}");
-    // stdout: the sweep id, then `job-id label` per job.
+    // stdout: the sweep id, then `job-id label` per job, a blank line, the result table
+    // (header and one row per combination).
     let mut lines = stdout.lines();
     let sweep_id = lines.next().expect("sweep id").trim().to_string();
-    let listed: Vec<&str> = lines.collect();
+    let listed: Vec<&str> = lines.by_ref().take_while(|l| !l.is_empty()).collect();
     assert_eq!(listed.len(), 3, "{stdout}");
+    let table: Vec<&str> = lines.collect();
+    assert!(
+        table
+            .first()
+            .is_some_and(|h| h.starts_with("cracks.0.propagation.toughness")),
+        "{stdout}"
+    );
 
     let sw = s.get_json(&format!("/api/v1/sweeps/{sweep_id}"));
     assert_eq!(sw["status"], "completed", "{sw}");
@@ -153,6 +161,17 @@ fn rosakis_mini_toughness_sweep_through_the_service() {
         assert_eq!(f(&j["values"]["cracks.0.propagation.toughness"]), g, "{j}");
         let id = j["id"].as_str().expect("job id");
         assert!(listed.iter().any(|l| l.starts_with(id)), "{stdout}");
+        let row = table
+            .iter()
+            .find(|l| l.contains(id))
+            .unwrap_or_else(|| panic!("no table row for {id}: {stdout}"));
+        let cells: Vec<&str> = row.split_whitespace().collect();
+        assert_eq!(
+            cells.first().copied(),
+            Some(format!("{g}").as_str()),
+            "{row}"
+        );
+        assert!(cells.contains(&"completed"), "{row}");
         let job = s.job(id);
         assert_eq!(job["sweep_id"], sweep_id.as_str());
         assert_eq!(f(&job["scene"]["cracks"][0]["propagation"]["toughness"]), g);

@@ -542,7 +542,13 @@ fn submit_command_waits_and_exits_with_the_outcome() {
         .output()
         .expect("run submit");
     assert!(out.status.success(), "submit --wait: {out:?}");
-    let id = String::from_utf8_lossy(&out.stdout).trim().to_string();
+    // The first line is the job id (the result summary follows).
+    let id = String::from_utf8_lossy(&out.stdout)
+        .lines()
+        .next()
+        .unwrap_or("")
+        .trim()
+        .to_string();
     assert_eq!(status(&s.job(&id)), "completed");
 
     let mut bad = tiny_scene("cli-bad", 200, 0);

@@ -1,7 +1,8 @@
 // Client of the HTTP API (shared/design/api.md). Every call goes through `request`, which
 // turns error bodies {error, message, details} into an ApiError.
 
-const BASE = '/api/v1';
+/** Base path of the API. */
+export const BASE = '/api/v1';
 const TOKEN_KEY = 'fracture.token';
 
 /** The Bearer token the user pasted (kept in localStorage), or ''. */
@@ -82,6 +83,7 @@ export async function listJobs({ status, label, limit = 20, cursor } = {}) {
 
 export const getJob = (id) => request('GET', `/jobs/${encodeURIComponent(id)}`);
 export const cancelJob = (id) => request('POST', `/jobs/${encodeURIComponent(id)}/cancel`);
+export const rerunJob = (id) => request('POST', `/jobs/${encodeURIComponent(id)}/rerun`);
 export const deleteJob = (id) => request('DELETE', `/jobs/${encodeURIComponent(id)}`);
 export const submitJob = (req) => request('POST', '/jobs', { body: req });
 export const listScenes = () => request('GET', '/scenes');
@@ -100,11 +102,20 @@ export async function historyCsv(id, kind) {
   return res.blob();
 }
 
-export function snapshotUrl(id, index, component) {
-  return `${BASE}/jobs/${encodeURIComponent(id)}/snapshots/${index}/${encodeURIComponent(component)}.png`;
+/**
+ * A snapshot picture; `opts` are render options of the query (`px_per_cell`, `width`,
+ * `range`, …), `ext` `png` (the image) or `json` (its render report, with `aliased`).
+ */
+export function snapshotUrl(id, index, component, opts = {}, ext = 'png') {
+  const q = new URLSearchParams(Object.entries(opts).filter(([, v]) => v !== undefined && v !== null && v !== '')).toString();
+  return `${BASE}/jobs/${encodeURIComponent(id)}/snapshots/${index}/${encodeURIComponent(component)}.${ext}${q ? `?${q}` : ''}`;
 }
 export function mcapUrl(id) {
   return `${BASE}/jobs/${encodeURIComponent(id)}/fields.mcap`;
+}
+/** The snapshots as a zipped VTK series (`fields.pvd` for ParaView). */
+export function vtkUrl(id) {
+  return `${BASE}/jobs/${encodeURIComponent(id)}/vtk.zip`;
 }
 
 /**

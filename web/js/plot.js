@@ -22,6 +22,31 @@ function esc(s) {
 }
 
 /** About `n` "nice" ticks (1, 2, 5 × 10^k) covering [lo, hi]. */
+/** Vertical distance (px) two reference-line labels in one column keep (11 px text with its halo). */
+export const LABEL_GAP_PX = 14;
+/** Width of one label character (px), an estimate for the 11 px font. */
+const LABEL_CHAR_PX = 6.3;
+
+/**
+ * Place reference-line labels ({y, text}, y in px) in `columns` columns: each label keeps
+ * its line's y in the first column where it is at least `gap` below the column's last
+ * label; when no column has room it goes to the column whose last label is highest, pushed
+ * down to `gap` below it. Returns [{y, text, column}] sorted by y (the input is not changed).
+ */
+export function placeLabels(labels, columns, gap) {
+  const last = new Array(Math.max(1, columns)).fill(-Infinity);
+  return labels.map((l) => ({ ...l })).sort((a, b) => a.y - b.y).map((l) => {
+    let c = last.findIndex((y) => l.y - y >= gap);
+    let y = l.y;
+    if (c < 0) {
+      c = last.indexOf(Math.min(...last));
+      y = last[c] + gap;
+    }
+    last[c] = y;
+    return { ...l, y, column: c };
+  });
+}
+
 export function niceTicks(lo, hi, n = 5) {
   if (!(hi > lo)) return [lo];
   const raw = (hi - lo) / Math.max(1, n);
@@ -130,6 +155,18 @@ export class Plot {
     this.update();
   }
 
+  /**
+   * Order the series (and so the legend) by `rank(key)`, lowest first; equal ranks keep
+   * their order. The legend is redrawn only if the order changed.
+   */
+  orderBy(rank) {
+    const before = this.series.map((s) => s.key).join('\n');
+    this.series = this.series.map((s, i) => [s, i])
+      .sort((a, b) => (rank(a[0].key) - rank(b[0].key)) || (a[1] - b[1]))
+      .map(([s]) => s);
+    if (this.series.map((s) => s.key).join('\n') !== before) { this.legendDirty = true; this.update(); }
+  }
+
   setRefLines(lines) { this.refLines = lines || []; this.update(); }
   setXUnit(u) { this.o.xUnit = u; this.update(); }
   /** Fix the unzoomed time axis to [t0, t1] (widened if data fall outside). */
@@ -236,12 +273,18 @@ export class Plot {
         labels.push({ y, text: `${r.label} ${num(r.y, 4)}` });
       }
       parts.push('</g><g class="ref-label">');
-      labels.sort((a, b) => a.y - b.y);
-      for (let i = 1; i < labels.length; i++) labels[i].y = Math.max(labels[i].y, labels[i - 1].y + 11);
-      for (const l of labels) {
-        parts.push(this.labelsInside
-          ? `<text x="${this.M.left + pw - 3}" y="${(l.y - 2.5).toFixed(1)}" text-anchor="end">${esc(l.text)}</text>`
-          : `<text x="${this.M.left + pw + 4}" y="${(l.y + 3.5).toFixed(1)}">${esc(l.text)}</text>`);
+      // Staggered: a label that would touch the one above it (close speeds such as c_R and
+      // c_S) goes to the other column, still at its own line, and inside the frame just
+      // below it (away from the line above); only when both columns are taken is it
+      // pushed down.
+      const right = this.M.left + pw;
+      const widest = Math.max(0, ...labels.map((l) => l.text.length * LABEL_CHAR_PX));
+      const columns = this.labelsInside
+        ? [{ x: right - 3, anchor: 'end', dy: -2.5 }, { x: right - 3 - widest - 12, anchor: 'end', dy: 10.5 }]
+        : [{ x: right + 4, anchor: 'start', dy: 3.5 }, { x: right - 3, anchor: 'end', dy: 10.5 }];
+      for (const l of placeLabels(labels, columns.length, LABEL_GAP_PX)) {
+        const c = columns[l.column];
+        parts.push(`<text x="${c.x.toFixed(1)}" y="${(l.y + c.dy).toFixed(1)}"${c.anchor === 'end' ? ' text-anchor="end"' : ''} data-column="${l.column}">${esc(l.text)}</text>`);
       }
       parts.push('</g>');
     }

@@ -80,6 +80,23 @@ export function duration(s) {
   return `${hr} h ${String(m - 60 * hr).padStart(2, '0')} min`;
 }
 
+/**
+ * Seconds left of a run that has done `fraction` (0–1] of its simulated time in `elapsed`
+ * seconds, assuming the rate so far holds; null while too little is done to tell (< 1 %).
+ */
+export function etaSeconds(fraction, elapsed) {
+  if (!(Number.isFinite(fraction) && Number.isFinite(elapsed)) || fraction < 0.01 || elapsed < 0) return null;
+  if (fraction >= 1) return 0;
+  return elapsed * (1 - fraction) / fraction;
+}
+
+/** The ETA text of a running job (`about 2 min 05 s left`), or '' when it cannot be told. */
+export function etaText(job, now = Date.now()) {
+  if (!job || job.status !== 'running' || !job.started_at || !job.progress) return '';
+  const eta = etaSeconds(Number(job.progress.fraction), (now - Date.parse(job.started_at)) / 1000);
+  return eta === null ? '' : `about ${duration(eta)} left`;
+}
+
 /** RFC 3339 → local "2026-11-23 14:05:09" (title attribute keeps the UTC original). */
 export function dateTime(iso) {
   if (!iso) return '–';

@@ -4,8 +4,9 @@ import { test } from 'node:test';
 import assert from 'node:assert/strict';
 import { rayleighSpeed, waveSpeeds, sceneWaveSpeeds } from '../js/waves.js';
 import { locate, splitPath, syntaxErrorPosition } from '../js/jsonlocate.js';
-import { niceTicks } from '../js/plot.js';
-import { prettyJson, siPrefix, num, parseLabels } from '../js/util.js';
+import { niceTicks, placeLabels, LABEL_GAP_PX } from '../js/plot.js';
+import { prettyJson, siPrefix, num, parseLabels, etaSeconds, etaText } from '../js/util.js';
+import { speedRefLines } from '../js/waves.js';
 
 test('wave speeds of Homalite-100 match reference-solutions.md', () => {
   const pe = waveSpeeds(5.2e9, 0.34, 1230, 'plane_strain');
@@ -78,4 +79,46 @@ test('prettyJson round-trips and keeps points on one line', () => {
   const t = prettyJson(v);
   assert.deepEqual(JSON.parse(t), v);
   assert.match(t, /"points": \[\[0.04, 0.05\], \[0.06, 0.05\]\]/);
+});
+
+test('reference labels close together are staggered, never overlapping', () => {
+  // Homalite: c_R and c_S are 7 % apart: a few pixels on a 200 px plot of 0 … c_L.
+  const sp = waveSpeeds(5.2e9, 0.34, 1230, 'plane_strain');
+  const sy = (v) => 220 - (v / (1.05 * sp.cL)) * 200;
+  const labels = speedRefLines(sp).map((r) => ({ y: sy(r.y), text: r.label }));
+  const cR = labels.find((l) => l.text === 'c_R'), cS = labels.find((l) => l.text === 'c_S');
+  assert.ok(Math.abs(cR.y - cS.y) < LABEL_GAP_PX, 'the case of the bug: lines closer than a label');
+  for (const columns of [1, 2]) {
+    const placed = placeLabels(labels, columns, LABEL_GAP_PX);
+    assert.equal(placed.length, labels.length);
+    for (let i = 0; i < placed.length; i++) {
+      for (let j = i + 1; j < placed.length; j++) {
+        if (placed[i].column === placed[j].column) {
+          assert.ok(Math.abs(placed[i].y - placed[j].y) >= LABEL_GAP_PX, `${placed[i].text} / ${placed[j].text} overlap`);
+        }
+      }
+    }
+    if (columns === 2) {
+      // staggered: both stay on their own lines, in different columns
+      const r = placed.find((l) => l.text === 'c_R'), s = placed.find((l) => l.text === 'c_S');
+      assert.notEqual(r.column, s.column);
+      assert.equal(r.y, cR.y);
+      assert.equal(s.y, cS.y);
+    }
+  }
+  // far-apart labels stay in the first column at their own height
+  const far = placeLabels([{ y: 10, text: 'a' }, { y: 100, text: 'b' }], 2, LABEL_GAP_PX);
+  assert.deepEqual(far.map((l) => [l.y, l.column]), [[10, 0], [100, 0]]);
+});
+
+test('the ETA follows the rate so far', () => {
+  assert.equal(etaSeconds(0.25, 30), 90);
+  assert.equal(etaSeconds(1, 30), 0);
+  assert.equal(etaSeconds(0.001, 30), null);
+  assert.equal(etaSeconds(NaN, 30), null);
+  const started = '2026-01-01T00:00:00.000Z';
+  const now = Date.parse(started) + 60_000;
+  assert.equal(etaText({ status: 'running', started_at: started, progress: { fraction: 0.5 } }, now), 'about 1 min 00 s left');
+  assert.equal(etaText({ status: 'queued', started_at: null, progress: null }, now), '');
+  assert.equal(etaText({ status: 'completed', started_at: started, progress: { fraction: 1 } }, now), '');
 });

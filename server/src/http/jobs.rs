@@ -1,10 +1,10 @@
-//! Jobs: submit (bare scene or `{scene, priority, labels}`), list with filters and cursors,
-//! one job, cancel, delete.
+//! Jobs: submit (bare scene or `{scene, priority, labels}`), list with filters (status,
+//! labels, name search) and cursors, one job, rerun, cancel, delete.
 
 use std::collections::BTreeMap;
 
 use axum::Json;
-use axum::extract::{Path, State};
+use axum::extract::{Path, RawQuery, State};
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::Response;
 use fracture_api::jobs::{ErrorBody, ErrorDetail, JobInfo, JobRequest, JobStatus};
@@ -14,7 +14,7 @@ use serde::Deserialize;
 use super::auth::ApiToken;
 use super::meta::admit;
 use super::{blocking, job_or_404, location, page, page_cursor, page_limit};
-use crate::error::{ApiError, ApiQuery, JsonBody, parse_json};
+use crate::error::{ApiError, JsonBody, parse_json};
 use crate::server::{AppState, new_job_id};
 use crate::store::{ListFilter, NewJob};
 
@@ -79,6 +79,7 @@ pub(super) async fn create_job(
         end_time: scene.time.end,
         priority: req.priority,
         labels: req.labels,
+        rerun_of: None,
     };
     let row = st.store.create_job(&job).await?;
     st.queue_changed.notify_waiters();
@@ -86,28 +87,92 @@ pub(super) async fn create_job(
     Ok((StatusCode::CREATED, h, Json(row.info(true)?)))
 }
 
-/// Query of `GET /api/v1/jobs`.
-#[derive(Debug, Deserialize, utoipa::IntoParams)]
+/// Query of `GET /api/v1/jobs` (read by [`ListQuery::parse`]: `label` may be repeated).
+#[derive(Debug, Default, Deserialize, utoipa::IntoParams)]
 #[serde(deny_unknown_fields)]
 pub(super) struct ListQuery {
     /// Only jobs in this state.
     status: Option<String>,
-    /// Only jobs with this label, `key:value`.
-    label: Option<String>,
+    /// Only jobs with this label, `key:value`; repeat it for jobs with all of them
+    /// (`?label=a:1&label=b:2`).
+    #[param(style = Form, explode)]
+    label: Vec<String>,
+    /// Only jobs whose name contains this text (ASCII letters compared case-insensitively).
+    q: Option<String>,
     /// Page size (default 50, at most 500).
     limit: Option<i64>,
     /// The `X-Next-Cursor` of the previous page.
     cursor: Option<String>,
 }
 
-/// Jobs, newest first (next page: the `X-Next-Cursor` response header).
+/// The parameters [`ListQuery`] knows, for the message of an unknown one.
+const LIST_PARAMETERS: &str = "`status`, `label`, `q`, `limit`, `cursor`";
+
+impl ListQuery {
+    /// Decode the query string. As with the other query types (`deny_unknown_fields`), an
+    /// unknown parameter, a repeated one other than `label` and a malformed value are 400s.
+    fn parse(raw: Option<&str>) -> Result<ListQuery, ApiError> {
+        let raw = raw.unwrap_or("");
+        let uri: axum::http::Uri = format!("/?{raw}")
+            .parse()
+            .map_err(|e| ApiError::BadRequest(format!("bad query string: {e}")))?;
+        let axum::extract::Query(pairs) =
+            axum::extract::Query::<Vec<(String, String)>>::try_from_uri(&uri).map_err(|e| {
+                ApiError::BadRequest(format!("bad query string: {}", e.body_text()))
+            })?;
+        let mut q = ListQuery::default();
+        // The message serde gave before (`bad query string: …`), now with the parameter in
+        // `details[].path`.
+        fn query_error(key: &str, what: String) -> ApiError {
+            ApiError::BadParameter {
+                message: format!("bad query string: {what}"),
+                details: vec![fracture_api::jobs::ErrorDetail {
+                    path: key.to_string(),
+                    message: what,
+                }],
+            }
+        }
+        fn once(slot: &mut Option<String>, key: &str, v: String) -> Result<(), ApiError> {
+            if slot.replace(v).is_some() {
+                return Err(query_error(key, format!("duplicate field `{key}`")));
+            }
+            Ok(())
+        }
+        let mut limit = None;
+        for (k, v) in pairs {
+            match k.as_str() {
+                "status" => once(&mut q.status, &k, v)?,
+                "q" => once(&mut q.q, &k, v)?,
+                "cursor" => once(&mut q.cursor, &k, v)?,
+                "limit" => once(&mut limit, &k, v)?,
+                "label" => q.label.push(v),
+                _ => {
+                    return Err(query_error(
+                        &k,
+                        format!("unknown field `{k}`, expected one of {LIST_PARAMETERS}"),
+                    ));
+                }
+            }
+        }
+        if let Some(l) = limit {
+            q.limit = Some(l.trim().parse::<i64>().map_err(|_| {
+                ApiError::bad_parameter("limit", format!("`{l}` is not a whole number"))
+            })?);
+        }
+        Ok(q)
+    }
+}
+
+/// Jobs, newest first (next page: the `X-Next-Cursor` response header). Filters combine
+/// with AND.
 #[utoipa::path(get, path = "/api/v1/jobs", tag = "jobs", params(ListQuery),
     responses((status = 200, description = "Jobs without their scenes", body = Vec<JobInfo>),
-        (status = 400, description = "Bad parameter", body = ErrorBody)))]
+        (status = 400, description = "Bad or unknown parameter", body = ErrorBody)))]
 pub(super) async fn list_jobs(
     State(st): State<AppState>,
-    ApiQuery(q): ApiQuery<ListQuery>,
+    RawQuery(raw): RawQuery,
 ) -> Result<Response, ApiError> {
+    let q = ListQuery::parse(raw.as_deref())?;
     let status = match q.status.as_deref() {
         None | Some("") => None,
         Some(s) => Some(JobStatus::parse(s).ok_or_else(|| {
@@ -116,22 +181,22 @@ pub(super) async fn list_jobs(
             ))
         })?),
     };
-    let label = match q.label.as_deref() {
-        None | Some("") => None,
-        Some(l) => {
-            let (k, v) = l
-                .split_once(':')
-                .ok_or_else(|| ApiError::BadRequest("label must be `key:value`".into()))?;
-            Some((k.to_string(), v.to_string()))
-        }
-    };
+    let mut labels = Vec::new();
+    for l in q.label.iter().filter(|l| !l.is_empty()) {
+        let (k, v) = l
+            .split_once(':')
+            .ok_or_else(|| ApiError::BadRequest("label must be `key:value`".into()))?;
+        labels.push((k.to_string(), v.to_string()));
+    }
+    let name_contains = q.q.clone().filter(|t| !t.is_empty());
     let limit = page_limit(q.limit)?;
     let before_seq = page_cursor(q.cursor.as_deref())?;
     let rows = st
         .store
         .list(&ListFilter {
             status,
-            label,
+            labels,
+            name_contains,
             limit,
             before_seq,
         })
@@ -159,6 +224,45 @@ pub(super) async fn get_job(
         o.insert("worker".into(), job.worker_id.clone().into());
     }
     Ok(Json(v))
+}
+
+/// Run a job's scene again: a new queued job with the same scene, name, labels and priority,
+/// whose `rerun_of` is the original's id. The scene is admitted again under this server's
+/// current limits (422 if it no longer fits them).
+#[utoipa::path(post, path = "/api/v1/jobs/{id}/rerun", tag = "jobs",
+    params(("id" = String, Path, description = "Id of the job to run again")),
+    responses((status = 201, description = "The new job, queued, with `rerun_of`", body = JobInfo),
+        (status = 401, description = "Missing or wrong API token", body = ErrorBody),
+        (status = 403, description = "A cross-site request", body = ErrorBody),
+        (status = 404, description = "Unknown id", body = ErrorBody),
+        (status = 422, description = "The scene is over a limit of this server", body = ErrorBody),
+        (status = 503, description = "The server is shutting down", body = ErrorBody)),
+    security(("bearer" = [])))]
+pub(super) async fn rerun_job(
+    State(st): State<AppState>,
+    _: ApiToken,
+    Path(id): Path<String>,
+) -> Result<(StatusCode, HeaderMap, Json<JobInfo>), ApiError> {
+    if st.shutting_down() {
+        return Err(ApiError::Unavailable);
+    }
+    let orig = job_or_404(&st, &id).await?;
+    let value: serde_json::Value = serde_json::from_str(&orig.scene).map_err(ApiError::internal)?;
+    let scene = validate::scene_from_value(value)?;
+    let (scene, _) = admit(&st, scene).await?;
+    let job = NewJob {
+        id: new_job_id(),
+        name: orig.name.clone(),
+        scene: scene.canonical_json(),
+        end_time: scene.time.end,
+        priority: orig.priority,
+        labels: orig.labels.clone(),
+        rerun_of: Some(orig.id.clone()),
+    };
+    let row = st.store.create_job(&job).await?;
+    st.queue_changed.notify_waiters();
+    let h = location(&format!("/api/v1/jobs/{}", row.id));
+    Ok((StatusCode::CREATED, h, Json(row.info(true)?)))
 }
 
 /// Cancel a job: a queued job at once, a running one within a second or two.

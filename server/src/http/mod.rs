@@ -1,7 +1,7 @@
 //! The HTTP API (`api.md`), one module per resource:
 //!
 //! * `meta`: health, example scenes, scene validation (and the admission of scenes that
-//!   every submitting route shares);
+//!   every submitting route shares); [`metrics`]: version and Prometheus metrics;
 //! * `jobs`: create, list, get, cancel, delete; `events`: a job's SSE stream;
 //! * `results`: crack tips, energy, snapshots, PNG fields, the MCAP file;
 //! * `sweeps`: parameter sweeps; `worker`: the worker protocol (claim, heartbeat, batches,
@@ -31,6 +31,7 @@ pub mod auth;
 mod events;
 mod jobs;
 mod meta;
+pub mod metrics;
 mod results;
 pub mod security;
 mod sweeps;
@@ -50,7 +51,7 @@ mod worker;
         (name = "sweeps", description = "Parameter sweeps: one job per combination of values"),
         (name = "results", description = "What a run produced"),
         (name = "scenes", description = "Example scenes and validation"),
-        (name = "service", description = "Health"),
+        (name = "service", description = "Health, version, metrics"),
         (name = "worker", description = "Worker protocol (worker token)")
     ),
     components(schemas(
@@ -88,16 +89,20 @@ pub fn app(state: AppState) -> Router {
     let limits = state.cfg.limits.clone();
     let public = OpenApiRouter::with_openapi(ApiDoc::openapi())
         .routes(routes!(meta::health))
+        .routes(routes!(metrics::version))
+        .routes(routes!(metrics::metrics))
         .routes(routes!(meta::list_scenes))
         .routes(routes!(meta::validate_scene))
         .routes(routes!(jobs::create_job, jobs::list_jobs))
         .routes(routes!(jobs::get_job, jobs::delete_job))
         .routes(routes!(jobs::cancel_job))
+        .routes(routes!(jobs::rerun_job))
         .routes(routes!(results::get_crack_tips))
         .routes(routes!(results::get_energy))
         .routes(routes!(results::list_snapshots))
         .routes(routes!(results::snapshot_png))
         .routes(routes!(results::fields_mcap))
+        .routes(routes!(results::vtk_zip))
         .routes(routes!(events::job_events))
         .routes(routes!(sweeps::create_sweep, sweeps::list_sweeps))
         .routes(routes!(sweeps::get_sweep, sweeps::delete_sweep))

@@ -218,6 +218,7 @@ fn build_sweep_jobs(b: &SweepBase<'_>) -> Result<Vec<NewSweepJob>, ApiError> {
                 end_time: scene.time.end,
                 priority: b.priority,
                 labels,
+                rerun_of: None,
             },
             label,
             values: serde_json::Value::Object(values).to_string(),

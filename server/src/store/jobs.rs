@@ -62,6 +62,8 @@ pub struct JobRow {
     pub sweep_label: Option<String>,
     /// The job's parameter values, `{"path": value}`.
     pub sweep_values: Option<serde_json::Map<String, serde_json::Value>>,
+    /// The job this one reruns.
+    pub rerun_of: Option<String>,
 }
 
 impl JobRow {
@@ -102,6 +104,7 @@ impl JobRow {
             sweep_index,
             sweep_label: col(r, "sweep_label")?,
             sweep_values: opt_json_col(r, "sweep_values")?,
+            rerun_of: col(r, "rerun_of")?,
         })
     }
 
@@ -133,6 +136,7 @@ impl JobRow {
             summary: self.summary.clone(),
             message: self.message.clone(),
             sweep_id: self.sweep_id.clone(),
+            rerun_of: self.rerun_of.clone(),
         })
     }
 
@@ -153,8 +157,10 @@ impl JobRow {
 pub struct ListFilter {
     /// Only this status.
     pub status: Option<JobStatus>,
-    /// Only jobs with this label `(key, value)`.
-    pub label: Option<(String, String)>,
+    /// Only jobs with every one of these labels `(key, value)`.
+    pub labels: Vec<(String, String)>,
+    /// Only jobs whose name contains this text (ASCII letters compared case-insensitively).
+    pub name_contains: Option<String>,
     /// Page size.
     pub limit: i64,
     /// Only jobs older than this sequence number.
@@ -176,6 +182,8 @@ pub struct NewJob {
     pub priority: i64,
     /// Labels.
     pub labels: BTreeMap<String, String>,
+    /// The job this one reruns, if any.
+    pub rerun_of: Option<String>,
 }
 
 impl Store {
@@ -183,8 +191,9 @@ impl Store {
     pub async fn create_job(&self, j: &NewJob) -> Result<JobRow, StoreError> {
         let mut tx = self.pool.begin().await?;
         let row = sqlx::query(
-            "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at)
-             VALUES (?, ?, 'queued', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'))
+            "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at,
+                               rerun_of)
+             VALUES (?, ?, 'queued', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'), ?)
              RETURNING *",
         )
         .bind(&j.id)
@@ -193,6 +202,7 @@ impl Store {
         .bind(to_json("labels", &j.labels)?)
         .bind(&j.scene)
         .bind(j.end_time)
+        .bind(&j.rerun_of)
         .fetch_one(&mut *tx)
         .await?;
         tx.commit().await?;
@@ -216,12 +226,17 @@ impl Store {
         if let Some(s) = f.status {
             q.push(" AND status = ").push_bind(s.as_str());
         }
-        if let Some((k, v)) = &f.label {
+        for (k, v) in &f.labels {
             q.push(" AND EXISTS (SELECT 1 FROM json_each(jobs.labels) WHERE json_each.key = ")
                 .push_bind(k.clone())
                 .push(" AND json_each.value = ")
                 .push_bind(v.clone())
                 .push(")");
+        }
+        if let Some(text) = &f.name_contains {
+            q.push(" AND instr(lower(name), lower(")
+                .push_bind(text.clone())
+                .push(")) > 0");
         }
         if let Some(b) = f.before_seq {
             q.push(" AND seq < ").push_bind(b);
@@ -283,5 +298,70 @@ impl Store {
         }
         tx.commit().await?;
         Ok(n == 1)
+    }
+}
+
+/// A running job as the metrics see it.
+#[derive(Debug, Clone)]
+pub struct RunningJob {
+    /// Job id.
+    pub id: String,
+    /// Canonical scene JSON.
+    pub scene: String,
+    /// Steps taken (latest progress).
+    pub step: u64,
+    /// Seconds since the claim.
+    pub elapsed_seconds: f64,
+}
+
+/// What `GET /metrics` reads from the store.
+#[derive(Debug, Clone, Default)]
+pub struct StoreMetrics {
+    /// Jobs per state.
+    pub by_status: std::collections::HashMap<String, u64>,
+    /// Jobs that ended within the window.
+    pub finished_in_window: u64,
+    /// The running jobs.
+    pub running: Vec<RunningJob>,
+}
+
+impl Store {
+    /// Counts per state, jobs finished in the last `window_seconds`, and the running jobs.
+    pub async fn metrics(&self, window_seconds: u32) -> Result<StoreMetrics, StoreError> {
+        let mut m = StoreMetrics::default();
+        for r in sqlx::query("SELECT status, COUNT(*) AS n FROM jobs GROUP BY status")
+            .fetch_all(&self.pool)
+            .await?
+        {
+            let s: String = col(&r, "status")?;
+            let n: i64 = col(&r, "n")?;
+            m.by_status.insert(s, n.max(0) as u64);
+        }
+        let n: i64 = sqlx::query_scalar(
+            "SELECT COUNT(*) FROM jobs WHERE finished_at IS NOT NULL
+               AND finished_at >= strftime('%Y-%m-%dT%H:%M:%fZ', 'now', '-' || ? || ' seconds')",
+        )
+        .bind(i64::from(window_seconds))
+        .fetch_one(&self.pool)
+        .await?;
+        m.finished_in_window = n.max(0) as u64;
+        for r in sqlx::query(
+            "SELECT id, scene, progress,
+                    (julianday('now') - julianday(started_at)) * 86400.0 AS elapsed
+             FROM jobs WHERE status = 'running'",
+        )
+        .fetch_all(&self.pool)
+        .await?
+        {
+            let progress: Option<Progress> = opt_json_col(&r, "progress")?;
+            let elapsed: Option<f64> = col(&r, "elapsed")?;
+            m.running.push(RunningJob {
+                id: col(&r, "id")?,
+                scene: col(&r, "scene")?,
+                step: progress.map(|p| p.step).unwrap_or(0),
+                elapsed_seconds: elapsed.unwrap_or(0.0),
+            });
+        }
+        Ok(m)
     }
 }

@@ -39,7 +39,7 @@ mod queue;
 mod results;
 mod sweeps;
 
-pub use jobs::{JobRow, ListFilter, NewJob};
+pub use jobs::{JobRow, ListFilter, NewJob, RunningJob, StoreMetrics};
 pub use queue::Claimed;
 pub use sweeps::{NewSweep, NewSweepJob, SweepRow};
 

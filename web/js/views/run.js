@@ -5,7 +5,7 @@
 import * as api from '../api.js';
 import { Plot, PALETTE, DASHES } from '../plot.js';
 import { sceneWaveSpeeds, speedRefLines } from '../waves.js';
-import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson, orderScene } from '../util.js';
+import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson, orderScene, etaText } from '../util.js';
 import { wallTime, labelChips } from './runs.js';
 
 const TERMINAL = new Set(['completed', 'failed', 'cancelled']);
@@ -148,11 +148,14 @@ export function runView(main, { id }) {
     replace(actions,
       running ? h('button', { type: 'button', class: 'danger', id: 'cancel-run', onclick: onCancel }, 'Cancel run') : null,
       TERMINAL.has(job.status) ? h('button', { type: 'button', class: 'danger secondary', id: 'delete-run', onclick: onDelete }, 'Delete run') : null,
+      h('a', { class: 'button secondary', id: 'clone-run', href: `#/submit?from=${encodeURIComponent(id)}`, title: 'Open the scene editor with this run’s scene' }, 'Clone'),
+      h('button', { type: 'button', class: 'secondary', id: 'rerun-run', onclick: onRerun, title: 'Run the same scene again, with the same name and labels' }, 'Rerun'),
       h('a', { class: 'button secondary', href: `#/compare?ids=${encodeURIComponent(id)}` }, 'Compare…'));
     replace(messageHost, job.message && job.status !== 'completed' ? h('p', { class: job.status === 'failed' ? 'error' : 'notice' }, job.message) : null);
     renderProgress();
     replace(metaHost,
       meta('Id', h('span', { class: 'mono' }, job.id)),
+      job.rerun_of ? meta('Rerun of', h('a', { href: `#/runs/${encodeURIComponent(job.rerun_of)}`, id: 'rerun-of-link', class: 'mono' }, job.rerun_of)) : null,
       job.sweep_id ? meta('Sweep', h('a', { href: `#/sweeps/${encodeURIComponent(job.sweep_id)}`, id: 'run-sweep-link' }, 'part of a sweep: compare its runs')) : null,
       meta('Labels', labelChips(job.labels)),
       meta('Created', timeEl(job.created_at)),
@@ -170,7 +173,8 @@ export function runView(main, { id }) {
     replace(progressHost,
       h('progress', { max: 1000, value: Math.round(f * 1000), 'aria-label': 'Run progress' }),
       h('span', { class: 'muted' }, job.status === 'queued' ? 'queued, waiting for a worker' :
-        `${(f * 100).toFixed(1)} % · step ${p ? count(p.step) : '–'} · t = ${p ? si(p.sim_time, 's') : '–'} of ${p ? si(p.end_time, 's') : '–'}`));
+        `${(f * 100).toFixed(1)} % · step ${p ? count(p.step) : '–'} · t = ${p ? si(p.sim_time, 's') : '–'} of ${p ? si(p.end_time, 's') : '–'}`),
+      h('span', { class: 'muted', id: 'run-eta' }, etaText(job) ? ` · ${etaText(job)}` : ''));
   }
 
   function meta(k, v) {
@@ -185,6 +189,18 @@ export function runView(main, { id }) {
       await refreshJob();
     } catch (e) {
       notify(`Cancel failed: ${e.message}${e.status === 401 ? ' (set the API token at the top)' : ''}`, 'error');
+      ev.target.disabled = false;
+    }
+  }
+
+  async function onRerun(ev) {
+    ev.target.disabled = true;
+    try {
+      const j = await api.rerunJob(id);
+      notify(`Rerun submitted: ${j.id}`);
+      location.hash = `#/runs/${encodeURIComponent(j.id)}`;
+    } catch (e) {
+      notify(`Rerun failed: ${e.message}${e.status === 401 ? ' (set the API token at the top)' : ''}`, 'error');
       ev.target.disabled = false;
     }
   }
@@ -249,8 +265,9 @@ export function runView(main, { id }) {
       h('div', { class: 'row wrap' },
         csv('crack-tips', 'crack_tips.csv'), csv('energy', 'energy.csv'),
         h('a', { class: 'button secondary', href: api.mcapUrl(id), download: `${job.name || id}-fields.mcap` }, 'fields.mcap'),
+        h('a', { class: 'button secondary', id: 'dl-vtk', href: api.vtkUrl(id), download: `${id}-vtk.zip` }, 'ParaView (VTK)'),
         json(job.scene, 'scene.json'), json(job.summary, 'summary.json')),
-      h('p', { class: 'muted small-text' }, 'fields.mcap opens in Foxglove; while the run is going it holds what has been written so far.'));
+      h('p', { class: 'muted small-text' }, 'fields.mcap opens in Foxglove; while the run is going it holds what has been written so far. ParaView (VTK) is a zip of the field snapshots as a VTK series: open its fields.pvd (and cracks.pvd) in ParaView.'));
   }
 
   // ---- snapshots ------------------------------------------------------------------------
@@ -258,6 +275,11 @@ export function runView(main, { id }) {
   const slider = h('input', { id: 'snap-slider', type: 'range', min: 0, max: 0, step: 1, value: 0 });
   const timeOut = h('output', { for: 'snap-slider', class: 'mono' }, '–');
   const playBtn = h('button', { type: 'button', id: 'snap-play', 'aria-pressed': 'false' }, '▶ Play');
+  const ppcSel = h('select', { id: 'snap-ppc', title: 'Pixels per grid cell of the picture' },
+    h('option', { value: '' }, 'auto'), [4, 8, 16].map((n) => h('option', { value: String(n) }, `${n} px per cell`)));
+  const snapNote = h('p', { id: 'snap-note', class: 'muted small-text', hidden: true });
+  const reports = new Map(); // report URL → promise of the render report
+  const pictureOpts = () => ({ px_per_cell: ppcSel.value });
   const img = h('img', { id: 'snap-image', class: 'snap-image', alt: '', hidden: true });
   const snapEmpty = h('p', { class: 'muted' }, 'No field snapshots yet.');
   let following = true; // slider follows the newest snapshot while live
@@ -265,9 +287,11 @@ export function runView(main, { id }) {
     h('div', { class: 'snap-controls' },
       h('div', { class: 'field' }, h('label', { for: 'snap-component' }, 'Field'), compSel),
       h('div', { class: 'field grow' }, h('label', { for: 'snap-slider' }, 'Time ', timeOut), slider),
+      h('div', { class: 'field' }, h('label', { for: 'snap-ppc' }, 'Resolution'), ppcSel),
       playBtn),
-    h('figure', { class: 'snap' }, img, snapEmpty));
+    h('figure', { class: 'snap' }, img, snapEmpty), snapNote);
   compSel.addEventListener('change', showSnapshot);
+  ppcSel.addEventListener('change', showSnapshot);
   slider.addEventListener('input', () => { following = Number(slider.value) === snapshots.length - 1; stop(); showSnapshot(); });
   playBtn.addEventListener('click', () => (playTimer ? stop() : play()));
 
@@ -299,7 +323,8 @@ export function runView(main, { id }) {
     let comp = compSel.value;
     if (!snapshotComponents(s).includes(comp)) comp = snapshotComponents(s)[0];
     if (!comp) return;
-    const url = api.snapshotUrl(id, s.index, comp);
+    const url = api.snapshotUrl(id, s.index, comp, pictureOpts());
+    showReport(s, comp);
     timeOut.textContent = `${si(s.time, 's')} (${Number(slider.value) + 1}/${snapshots.length})`;
     slider.setAttribute('aria-valuetext', `t = ${si(s.time, 's')}, snapshot ${Number(slider.value) + 1} of ${snapshots.length}`);
     if (img.dataset.src !== url) {
@@ -309,6 +334,23 @@ export function runView(main, { id }) {
     img.alt = `${COMPONENT_NAMES[comp] || comp} at t = ${si(s.time, 's')}, with its colour scale and the crack path`;
     img.hidden = false;
     snapEmpty.hidden = true;
+  }
+
+  /** Under a fringe picture: whether every fringe is resolved (the server's render report). */
+  function showReport(s, comp) {
+    if (comp !== 'fringe') { snapNote.hidden = true; delete snapNote.dataset.aliased; return; }
+    const url = api.snapshotUrl(id, s.index, comp, pictureOpts(), 'json');
+    if (!reports.has(url)) reports.set(url, api.request('GET', url.slice(api.BASE.length)).catch(() => null));
+    snapNote.dataset.for = url;
+    reports.get(url).then((r) => {
+      if (!alive || snapNote.dataset.for !== url || !r) return;
+      snapNote.dataset.aliased = String(!!r.aliased);
+      const box = r.aliased_box ? ` around x ${num(r.aliased_box[0] * 1e3, 3)}–${num(r.aliased_box[2] * 1e3, 3)} mm, y ${num(r.aliased_box[1] * 1e3, 3)}–${num(r.aliased_box[3] * 1e3, 3)} mm` : '';
+      snapNote.textContent = r.aliased
+        ? `Some fringes are finer than a pixel at ${num(r.px_per_cell, 3)} px per cell (up to ${num(r.max_fringes_per_pixel, 3)} fringes per pixel${box}): they are not resolved; a higher resolution resolves more of them.`
+        : `Every fringe is resolved at ${num(r.px_per_cell, 3)} px per cell (at most ${num(r.max_fringes_per_pixel, 3)} fringes per pixel).`;
+      snapNote.hidden = false;
+    });
   }
 
   function play() {
@@ -328,7 +370,7 @@ export function runView(main, { id }) {
         showSnapshot();
         playTimer = setTimeout(step, 500);
       };
-      next.src = api.snapshotUrl(id, snapshots[i].index, snapshotComponents(snapshots[i]).includes(compSel.value) ? compSel.value : snapshotComponents(snapshots[i])[0]);
+      next.src = api.snapshotUrl(id, snapshots[i].index, snapshotComponents(snapshots[i]).includes(compSel.value) ? compSel.value : snapshotComponents(snapshots[i])[0], pictureOpts());
     };
     playTimer = setTimeout(step, 300);
   }
@@ -358,6 +400,21 @@ export function runView(main, { id }) {
     if (TERMINAL.has(status)) finish();
   }
 
+  /**
+   * A run that did not complete has no data past its last sample: end the time axis there
+   * (instead of at the scene's end time) so its curves fill the plots.
+   */
+  function fitTimeAxis() {
+    if (!job || !TERMINAL.has(job.status) || job.status === 'completed') return;
+    let last = Math.max(lastEnergy, ...lastTip.values());
+    const reached = job.summary ? Number(job.summary.sim_time) : job.progress ? Number(job.progress.sim_time) : NaN;
+    if (!(last > 0) && reached > 0) last = reached;
+    if (!(last > 0)) return;
+    const tu = timeUnit(last);
+    for (const p of plots) { p.setXUnit(tu); p.setXDomain(0, last); }
+    plotGrid.dataset.timeEnd = String(last);
+  }
+
   let finishing = false;
   async function finish() {
     if (finishing) return;
@@ -368,6 +425,7 @@ export function runView(main, { id }) {
     try {
       await refreshJob();
       await Promise.all([fillHistories(), loadSnapshots()]);
+      if (alive) fitTimeAxis();
     } catch (e) {
       if (alive) notify(`Could not load the final results: ${e.message}`, 'error');
     }
@@ -427,6 +485,7 @@ export function runView(main, { id }) {
     const end = (job.scene && job.scene.time && job.scene.time.end) || (job.progress && job.progress.end_time) || 1e-4;
     const tu = timeUnit(end);
     for (const p of plots) { p.setXUnit(tu); p.setXDomain(0, end); }
+    plotGrid.dataset.timeEnd = String(end);
     speedPlot.setRefLines(speedRefLines(speeds && speeds.speeds));
     renderHeader();
     renderSummary();
@@ -444,7 +503,7 @@ export function runView(main, { id }) {
     }
     ready = true;
     for (const f of pending.splice(0)) f();
-    if (TERMINAL.has(job.status)) finishing = true;
+    if (TERMINAL.has(job.status)) { finishing = true; fitTimeAxis(); }
   })();
 
   return () => {

@@ -2,7 +2,7 @@
 // filters by status and label (kept in the URL), cursor paging, selection for compare.
 
 import { listJobs, ApiError } from '../api.js';
-import { h, replace, timeEl, duration, count, statusBadge, hashQuery } from '../util.js';
+import { h, replace, timeEl, duration, count, statusBadge, hashQuery, etaText } from '../util.js';
 
 const STATUSES = ['queued', 'running', 'completed', 'failed', 'cancelled'];
 const PAGE = 20;
@@ -18,9 +18,11 @@ export function wallTime(job) {
 export function progressBar(job) {
   const f = job.progress && Number.isFinite(job.progress.fraction) ? job.progress.fraction : 0;
   const pct = Math.round(Math.max(0, Math.min(1, f)) * 100);
+  const eta = etaText(job);
   return h('div', { class: 'progress-cell' },
     h('progress', { max: 100, value: pct, 'aria-label': `${job.name || job.id} progress` }),
-    h('span', { class: 'pct' }, `${pct} %`));
+    h('span', { class: 'pct' }, `${pct} %`),
+    eta ? h('span', { class: 'eta muted small-text' }, eta) : null);
 }
 
 export function labelChips(labels, onPick) {

@@ -210,8 +210,15 @@ export function submitView(main) {
   exampleSel.addEventListener('change', () => {
     const s = scenes.find((x) => x.name === exampleSel.value);
     if (!s) return;
+    // Nothing of the previous example (or copied run) stays: its name and description go
+    // with it, and the "copy of a run" entry once another example is picked.
+    const copy = exampleSel.querySelector('option[value=""]');
+    if (copy) copy.remove();
     exampleDesc.textContent = s.description || '';
-    setText(s.scene);
+    const scene = { ...s.scene };
+    scene.name = s.scene.name || s.name;
+    if (s.scene.description) scene.description = s.scene.description; else delete scene.description;
+    setText(scene);
     validate(false);
   });
 

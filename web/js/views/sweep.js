@@ -182,6 +182,14 @@ export function sweepView(main, { id }) {
         }
       }));
       if (!alive) return;
+      // Rows arrive job by job in any order: keep the legend in the table's order.
+      const rank = new Map();
+      jobs.forEach((j, i) => {
+        const th = hist.get(j.id);
+        let k = 0;
+        if (th) for (const key of th.tips.keys()) rank.set(`${j.id}/${key}`, i * 1000 + k++);
+      });
+      speedPlot.orderBy((key) => rank.get(key) ?? Number.MAX_SAFE_INTEGER);
       render();
       if (isActive(sweep)) timer = setTimeout(load, 2000);
     } catch (e) {
