@@ -292,6 +292,17 @@ impl Cracks {
                     up
                 };
                 // Impulse on the above side: pulls it back along −dir.
+                // A point that opens by a good part of δ_c in one step (a fast-sliding mode II
+                // face) would take far more than its Γ·area in that step at the start-of-step
+                // traction: cap the force so the step's expected work, over the separation
+                // the last step's rate predicts, stays within what the point has left.
+                let left = (zone.capacity - zone.positive_work).max(0.0);
+                let expected = (s_next - s).max(0.0) * share * thickness;
+                let sigma = if expected > 0.0 {
+                    sigma.min(left / expected)
+                } else {
+                    sigma
+                };
                 let magnitude = sigma * share * thickness * dt;
                 // Nodes of the point's cell with both sides present, bilinear weights.
                 let xi = geom.xi(pt.x);
