@@ -4,7 +4,8 @@
 
 use crate::grid::{GridGeom, Node};
 
-use super::geometry::{crosses, seg_normal};
+use super::geometry::seg_normal;
+use super::zone::Field;
 use super::{Cracks, mass_weighted_at};
 
 impl Cracks {
@@ -21,20 +22,9 @@ impl Cracks {
         f1: &'n [Node],
         slot_of: &[u32],
     ) -> Option<&'n Node> {
-        let node = geom.node_pos(ix, iy);
-        let mut count = 0;
-        for &(ci, si) in self.segs_near(geom, from) {
-            let c = &self.cracks[ci as usize];
-            if crosses(from, node, c.pts[si as usize].x, c.pts[si as usize + 1].x) {
-                count += 1;
-            }
-        }
-        let idx = geom.index(ix, iy);
-        if count % 2 == 0 {
-            Some(&nodes[idx])
-        } else {
-            let s = slot_of[idx];
-            (s != u32::MAX).then(|| &f1[s as usize])
+        match self.side_field(geom, from, ix, iy, slot_of)? {
+            Field::Zero(i) => Some(&nodes[i]),
+            Field::One(s) => Some(&f1[s]),
         }
     }
 

@@ -166,17 +166,19 @@ impl Zone {
     }
 }
 
-/// Which field of a node holds the material on one side.
+/// Which field of a node holds the material on one side: field 0 at a storage index, or
+/// field 1 at a slot.
 #[derive(Clone, Copy, PartialEq, Eq)]
-enum Field {
+pub(super) enum Field {
     Zero(usize),
     One(usize),
 }
 
 impl Cracks {
-    /// The field of node (ix, iy) that the material at `from` reaches (the crossing parity of
-    /// the line from → node, as `side_node`).
-    fn side_field(
+    /// The field of node (ix, iy) that the material at `from` reaches: field 0 when the line
+    /// from → node crosses the cracks an even number of times, field 1 (if the node has one)
+    /// when odd.
+    pub(super) fn side_field(
         &self,
         geom: &GridGeom,
         from: [f64; 2],
