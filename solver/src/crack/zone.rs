@@ -66,6 +66,8 @@ pub struct Zone {
     pub(crate) last: Option<([f64; 2], [f64; 2])>,
     /// Effective separation at the last step (NaN before the first).
     pub(crate) prev_separation: f64,
+    /// Failed in its tail: past δ_c, its faces stopped opening.
+    pub(crate) dead: bool,
 }
 
 impl Zone {
@@ -84,13 +86,15 @@ impl Zone {
             side: 0,
             last: None,
             prev_separation: f64::NAN,
+            dead: false,
         }
     }
 
     /// Whether the point carries no traction any more: opened past δ_c, or has taken its
     /// toughness × area.
     pub fn failed(&self) -> bool {
-        self.max_separation >= Self::TAIL * self.critical_separation
+        self.dead
+            || self.max_separation >= Self::TAIL * self.critical_separation
             || (self.capacity > 0.0 && self.positive_work >= self.capacity)
     }
 
@@ -145,7 +149,14 @@ impl Zone {
             return 0.0;
         }
         if self.max_separation >= self.critical_separation {
-            // Past the law's end: the tail that takes the rest of Γ × area.
+            // Past the law's end: the tail that takes the rest of Γ × area while the faces
+            // keep opening. Faces that stop opening end it: a traction that does not follow
+            // the separation would pump energy into faces vibrating under it (seen on a strip
+            // at 0.5 mm cells: −17.9 J "dissipated").
+            if s < self.max_separation {
+                self.dead = true;
+                return 0.0;
+            }
             return if self.capacity > 0.0 {
                 self.strength * (1.0 - self.positive_work / self.capacity).max(0.0).sqrt()
             } else {
