@@ -138,6 +138,20 @@ impl Crack {
         l - self.ext[0] - self.ext[1]
     }
 
+    /// Unit normal from above to below at point `k`: of the chord through its neighbours
+    /// (of the end segment at an end).
+    pub(crate) fn local_normal(&self, k: usize) -> [f64; 2] {
+        let n = self.pts.len();
+        let (pa, pb) = if k == 0 {
+            (self.pts[0].x, self.pts[1].x)
+        } else if k == n - 1 {
+            (self.pts[n - 2].x, self.pts[n - 1].x)
+        } else {
+            (self.pts[k - 1].x, self.pts[k + 1].x)
+        };
+        geometry::seg_normal(pa, pb)
+    }
+
     /// Tip position and outward unit direction e1 of tip `t`.
     pub fn tip_frame(&self, t: usize) -> ([f64; 2], [f64; 2]) {
         let n = self.pts.len();

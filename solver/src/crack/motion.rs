@@ -4,7 +4,6 @@
 
 use crate::grid::{GridGeom, Node};
 
-use super::geometry::seg_normal;
 use super::zone::Field;
 use super::{Cracks, mass_weighted_at};
 
@@ -65,14 +64,7 @@ impl Cracks {
             for k in 0..n {
                 let c = &self.cracks[ci];
                 // Local direction of the crack at point k.
-                let (pa, pb) = if k == 0 {
-                    (c.pts[0].x, c.pts[1].x)
-                } else if k == n - 1 {
-                    (c.pts[n - 2].x, c.pts[n - 1].x)
-                } else {
-                    (c.pts[k - 1].x, c.pts[k + 1].x)
-                };
-                let nrm = seg_normal(pa, pb); // above → below
+                let nrm = c.local_normal(k); // above → below
                 let pt = c.pts[k];
                 let from_above = [pt.above[0] - eps * nrm[0], pt.above[1] - eps * nrm[1]];
                 let from_below = [pt.below[0] + eps * nrm[0], pt.below[1] + eps * nrm[1]];

@@ -33,7 +33,7 @@
 
 use crate::grid::{GridGeom, Node};
 
-use super::geometry::{crosses, dist, seg_normal};
+use super::geometry::{crosses, dist};
 use super::{CrackPoint, Cracks};
 
 /// Traction–separation state of one crack point.
@@ -263,14 +263,7 @@ impl Cracks {
                     -1 => 0.5 * back,
                     _ => 0.5 * (back + fore),
                 };
-                let (pa, pb) = if k == 0 {
-                    (c.pts[0].x, c.pts[1].x)
-                } else if k == n - 1 {
-                    (c.pts[n - 2].x, c.pts[n - 1].x)
-                } else {
-                    (c.pts[k - 1].x, c.pts[k + 1].x)
-                };
-                let nrm = seg_normal(pa, pb); // above → below
+                let nrm = c.local_normal(k); // above → below
                 let up = [-nrm[0], -nrm[1]]; // left normal, towards the above side
                 let tan = [nrm[1], -nrm[0]]; // along the crack, pa → pb
                 let d = [pt.above[0] - pt.below[0], pt.above[1] - pt.below[1]];
