@@ -19,18 +19,17 @@ fn constants(s: &Scene) -> (f64, f64) {
     (big_m, m.wave_speeds(s.analysis).c_r)
 }
 
-/// A strip of height 2b = 20 cells (1 mm cells, 2×2 particles per cell), 150 mm long, with
+/// A strip of height 2b = 20 mm + h (cells of `h`, 2×2 particles per cell), 150 mm long, with
 /// an edge crack of 30 mm along its mid-plane (mid-cell), its top and bottom edges gripped
 /// (x fixed, y moved ±δ over 40 µs, ≈ 10 transits of b by c_L, then held), grown along the
 /// mid-plane by the equation of motion with toughness `toughness` (a JSON number or table)
 /// given as fractions of G_∞. Returns the scene and G_∞.
-fn strip(toughness_of_g: &dyn Fn(f64, f64) -> serde_json::Value) -> (Scene, f64) {
-    let h = 0.001;
+fn strip(h: f64, toughness_of_g: &dyn Fn(f64, f64) -> serde_json::Value) -> (Scene, f64) {
     let (len, b) = (0.150, 0.010);
     let m = 2.0 * h;
     let (y0, y1) = (m, m + 2.0 * b);
     let cy = 0.5 * (y0 + y1) + 0.5 * h;
-    let y1 = y1 + h; // the body is 21 cells high so the mid-plane lies at mid-cell
+    let y1 = y1 + h; // one cell more, so the mid-plane lies at mid-cell
     let delta = 2.0e-5; // per edge
     let t_load = 4.0e-5;
     let ramp = 1.0e-5;
@@ -149,17 +148,12 @@ fn slope(samples: &[Sample], t0: f64, t1: f64) -> f64 {
 /// over the last 50 µs) within 10 % of v*; while it runs, fewer than 2 % of the samples have
 /// J1 < −0.1 Γ(0).
 ///
-/// NOT YET MET at 1 mm (issue 16 stays open): 386 m/s, −17.8 % (0 running samples below
-/// −0.1 Γ(0)); the same strip at 0.5 mm cells (the ring and zone follow the cell) runs at
-/// 492 m/s, +4.8 %, so the law converges towards v* with h but this test's 1 mm grid is too
-/// coarse for 10 %. The 1 mm number moved with the zone's details while this was built
-/// (−28 % when a point failed at δ_c whatever it had taken; +12.5 % with a Γ·area tail that
-/// kept pulling on faces that had stopped opening, which at 0.5 mm pumped energy into them).
-/// Run with `--ignored` to measure.
+/// At 0.5 mm cells (the J ring and zone follow the cell: 3 mm and 1 mm). The same strip
+/// written as JSON and run with `fracture run` converges on v*: 386 m/s (−17.8 %) at 1 mm,
+/// 492 m/s (+4.8 %) at 0.5 mm, 461 m/s (−1.8 %) at 0.25 mm; 1 mm is too coarse for 10 %.
 #[test]
-#[ignore = "−17.8 % at 1 mm (+4.8 % at 0.5 mm): issue 16 open"]
 fn strip_with_fixed_grips_runs_at_the_speed_where_toughness_meets_g_infinity() {
-    let (s, g_inf) = strip(&|g, c_r| json!([[0.0, 0.6 * g], [c_r, 1.6 * g]]));
+    let (s, g_inf) = strip(0.0005, &|g, c_r| json!([[0.0, 0.6 * g], [c_r, 1.6 * g]]));
     let (_, c_r) = constants(&s);
     let v_star = 0.4 * c_r;
     let (samples, _) = run(&s);
@@ -194,7 +188,7 @@ fn strip_with_fixed_grips_runs_at_the_speed_where_toughness_meets_g_infinity() {
 /// dissipation, closes within 5 % of the fracture energy plus 0.2 % of the work done.
 #[test]
 fn process_zone_dissipates_the_toughness_and_the_balance_closes() {
-    let (s, g_inf) = strip(&|g, _| json!(0.5 * g));
+    let (s, g_inf) = strip(0.001, &|g, _| json!(0.5 * g));
     let gamma = 0.5 * g_inf;
     let (samples, sim) = run(&s);
     let c = &sim.cracks().unwrap().cracks[0];
