@@ -163,8 +163,9 @@ impl Cracks {
                     mut j1,
                     ..
                 } = tf;
+                let radius = self.j_radius(ci);
                 if matches!(speed, GrowthSpeed::EquationOfMotion) {
-                    j1 += self.zone_outside_domain(ci, t, e1, self.j_radius(ci));
+                    j1 += self.zone_outside_domain(ci, t, e1, radius);
                 }
                 let kink = |angle: fn(f64, f64) -> f64, k: [f64; 2]| -> (f64, [f64; 2]) {
                     // G of the kink: J1 (the energy measure) times the kinked crack's
@@ -206,7 +207,6 @@ impl Cracks {
                         (j1, d)
                     }
                 };
-                let radius = self.j_radius(ci);
                 let (step_len, gamma, zone_len) = match speed {
                     GrowthSpeed::Wave => {
                         if !(g.is_finite() && g >= toughness.at_rest()) {

@@ -323,7 +323,9 @@ impl Cracks {
                 let from_above = [pt.x[0] - eps * nrm[0], pt.x[1] - eps * nrm[1]];
                 let from_below = [pt.x[0] + eps * nrm[0], pt.x[1] + eps * nrm[1]];
                 let mut applied = [0.0; 2];
-                let mut pairs: Vec<(f64, Field, Field)> = Vec::with_capacity(4);
+                // At most the 4 nodes of the cell: no allocation per point and step.
+                let mut pairs: [Option<(f64, Field, Field)>; 4] = [None; 4];
+                let mut count = 0;
                 let mut wsum = 0.0;
                 for (a, wa) in [(0, 1.0 - fx), (1, fx)] {
                     for (b, wb) in [(0, 1.0 - fy), (1, fy)] {
@@ -337,7 +339,8 @@ impl Cracks {
                         if let (Some(fa), Some(fb)) = (fa, fb)
                             && fa != fb
                         {
-                            pairs.push((w, fa, fb));
+                            pairs[count] = Some((w, fa, fb));
+                            count += 1;
                             wsum += w;
                         }
                     }
@@ -346,7 +349,7 @@ impl Cracks {
                     self.cracks[ci].pts[k].zone = Some(zone);
                     continue;
                 }
-                for (w, fa, fb) in pairs {
+                for (w, fa, fb) in pairs.into_iter().flatten() {
                     let want = magnitude * w / wsum;
                     let (na, nb): (&mut Node, &mut Node) = match (fa, fb) {
                         (Field::Zero(i), Field::One(s)) => (&mut nodes[i], &mut f1[s]),
