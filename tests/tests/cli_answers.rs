@@ -131,6 +131,43 @@ fn run(args: &[&str]) -> Output {
         .expect("run fracture")
 }
 
+/// `fracture submit FILE --server URL --wait --retry-seconds N`, its output piped.
+fn spawn_submit_wait(file: &std::path::Path, url: &str, retry_seconds: u32) -> std::process::Child {
+    Command::new(fracture_bin())
+        .args([
+            "submit",
+            file.to_str().expect("path"),
+            "--server",
+            url,
+            "--wait",
+            "--retry-seconds",
+            &retry_seconds.to_string(),
+        ])
+        .stdout(Stdio::piped())
+        .stderr(Stdio::piped())
+        .spawn()
+        .expect("start fracture submit")
+}
+
+/// Wait for `child` to exit, killing it and failing with `why` after `limit`.
+fn wait_bounded(
+    child: &mut std::process::Child,
+    limit: Duration,
+    why: &str,
+) -> std::process::ExitStatus {
+    let t0 = Instant::now();
+    loop {
+        if let Ok(Some(st)) = child.try_wait() {
+            return st;
+        }
+        if t0.elapsed() > limit {
+            let _ = child.kill();
+            panic!("{why}");
+        }
+        std::thread::sleep(Duration::from_millis(100));
+    }
+}
+
 #[test]
 fn submit_wait_prints_the_result_summary() {
     let dir = tempfile::tempdir().expect("tmp");
@@ -168,20 +205,7 @@ fn submit_wait_survives_a_server_restart() {
     let file = dir.path().join("scene.json");
     // Long enough to be running when the server stops: 40×20 cells, 20000 steps.
     std::fs::write(&file, scene("restart", 40, 20, 20_000, 0).to_string()).expect("write");
-    let mut child = Command::new(fracture_bin())
-        .args([
-            "submit",
-            file.to_str().expect("path"),
-            "--server",
-            &s.url,
-            "--wait",
-            "--retry-seconds",
-            "60",
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start fracture submit");
+    let mut child = spawn_submit_wait(&file, &s.url, 60);
     // Wait for the job to run, then stop the server for two seconds.
     let t0 = Instant::now();
     let id = loop {
@@ -193,17 +217,11 @@ fn submit_wait_survives_a_server_restart() {
         std::thread::sleep(Duration::from_millis(100));
     };
     s.restart_on_same_port(Duration::from_secs(2));
-    let t0 = Instant::now();
-    let status = loop {
-        if let Ok(Some(st)) = child.try_wait() {
-            break st;
-        }
-        if t0.elapsed() > Duration::from_secs(180) {
-            let _ = child.kill();
-            panic!("fracture submit --wait did not end after the restart");
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    };
+    let status = wait_bounded(
+        &mut child,
+        Duration::from_secs(180),
+        "fracture submit --wait did not end after the restart",
+    );
     let out = child.wait_with_output().expect("output");
     let stdout = String::from_utf8_lossy(&out.stdout).into_owned();
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
@@ -225,20 +243,7 @@ fn submit_wait_gives_up_after_the_retry_time() {
     let mut s = Server::start(dir.path(), &["--workers", "0"]);
     let file = dir.path().join("scene.json");
     std::fs::write(&file, tiny_scene("never-runs", 100, 0).to_string()).expect("write");
-    let mut child = Command::new(fracture_bin())
-        .args([
-            "submit",
-            file.to_str().expect("path"),
-            "--server",
-            &s.url,
-            "--wait",
-            "--retry-seconds",
-            "3",
-        ])
-        .stdout(Stdio::piped())
-        .stderr(Stdio::piped())
-        .spawn()
-        .expect("start fracture submit");
+    let mut child = spawn_submit_wait(&file, &s.url, 3);
     let t0 = Instant::now();
     while s.get_json("/api/v1/jobs").as_array().map(Vec::len) != Some(1) {
         assert!(t0.elapsed() < Duration::from_secs(30), "no job submitted");
@@ -247,16 +252,11 @@ fn submit_wait_gives_up_after_the_retry_time() {
     std::thread::sleep(Duration::from_millis(300));
     s.stop();
     let t0 = Instant::now();
-    let status = loop {
-        if let Ok(Some(st)) = child.try_wait() {
-            break st;
-        }
-        if t0.elapsed() > Duration::from_secs(60) {
-            let _ = child.kill();
-            panic!("fracture submit --wait did not give up");
-        }
-        std::thread::sleep(Duration::from_millis(100));
-    };
+    let status = wait_bounded(
+        &mut child,
+        Duration::from_secs(60),
+        "fracture submit --wait did not give up",
+    );
     let waited = t0.elapsed();
     let out = child.wait_with_output().expect("output");
     let stderr = String::from_utf8_lossy(&out.stderr).into_owned();
