@@ -15,7 +15,7 @@
 // The pure parts (ticks, zoom and pan transforms, nearest sample, thinning, legend state,
 // hover rows) are exported and tested in web/test/plot.test.mjs.
 
-import { h, num, siPrefix } from './util.js';
+import { h, num, replace, si, siPrefix } from './util.js';
 
 /** Colour-blind-safe palette (Okabe & Ito) plus a few extra hues. */
 export const PALETTE = ['#0072B2', '#D55E00', '#009E73', '#CC79A7', '#E69F00', '#56B4E9', '#7F3C8D', '#4D4D4D', '#A6761D', '#1B9E77'];
@@ -174,6 +174,37 @@ export function legendToggle(visible, key, solo = false) {
 }
 
 /**
+ * Centred moving mean over a time window `w`: each finite sample becomes the mean of the
+ * finite samples within ±w/2 of its time (xs ascending); non-finite samples stay gaps.
+ * Only the outputs from index `from` on are computed, into `out` (so a live series
+ * recomputes just its tail). `w <= 0` returns `ys` itself. Linear in the samples computed.
+ */
+export function movingMean(xs, ys, w, from = 0, out = new Array(xs.length)) {
+  if (!(w > 0)) return ys;
+  out.length = xs.length;
+  let a = from < xs.length ? lowerBound(xs, xs[from] - w / 2) : 0, b = a, sum = 0, n = 0;
+  for (let i = from; i < xs.length; i++) {
+    while (b < xs.length && xs[b] <= xs[i] + w / 2) { if (Number.isFinite(ys[b])) { sum += ys[b]; n++; } b++; }
+    while (xs[a] < xs[i] - w / 2) { if (Number.isFinite(ys[a])) { sum -= ys[a]; n--; } a++; }
+    out[i] = Number.isFinite(ys[i]) && n > 0 ? sum / n : NaN;
+  }
+  return out;
+}
+
+/** A value rounded to 1, 2 or 5 × 10^k. */
+function nice125(v) {
+  const mag = 10 ** Math.floor(Math.log10(v));
+  const m = v / mag;
+  return (m < 1.5 ? 1 : m < 3.5 ? 2 : m < 7.5 ? 5 : 10) * mag;
+}
+
+/** The filter windows offered for a time span: none, then about 1/200, 1/80, 1/40, 1/20 of it. */
+export function filterWindows(span) {
+  if (!(span > 0) || !Number.isFinite(span)) return [0];
+  return [0, ...new Set([200, 80, 40, 20].map((d) => nice125(span / d)))];
+}
+
+/**
  * The hover rows at data x: for each visible series with samples, its sample nearest to x
  * ({key, name, color, t, y}).
  */
@@ -182,9 +213,14 @@ export function hoverRows(series, x) {
   for (const s of series) {
     if (!s.visible || !s.xs.length) continue;
     const i = nearestIndex(s.xs, x);
-    rows.push({ key: s.key, name: s.name, color: s.color, t: s.xs[i], y: s.ys[i] });
+    rows.push({ key: s.key, name: s.name, color: s.color, dash: s.dash, t: s.xs[i], y: s.ys[i] });
   }
   return rows;
+}
+
+/** A short line in a series' colour and dash, for the legend and the readout. */
+function swatchSvg(color, dash) {
+  return `<svg width="22" height="10"><line x1="1" x2="21" y1="5" y2="5" stroke="${esc(color)}" stroke-width="2.5"${dash ? ` stroke-dasharray="${esc(dash)}"` : ''}/></svg>`;
 }
 
 export class Plot {
@@ -199,6 +235,13 @@ export class Plot {
     this.o = { height: 260, xLabel: 'time', xUnit: { factor: 1, unit: 's' }, yUnit: '', yPrefix: true, yZero: false, empty: 'No data yet', ...o };
     this.series = [];
     this.refLines = o.refLines || [];
+    // optional moving-mean filter (o.filter: index of the default window in filterWindows)
+    this.window = 0;
+    this.filterSelect = null;
+    if (o.filter !== undefined) {
+      this.filterSelect = h('select', { class: 'plot-filter', 'aria-label': `${o.title || 'plot'}: moving-mean filter`, title: 'Show a moving mean over a time window (the readout then shows the filtered values)', onchange: () => { this.window = Number(this.filterSelect.value) || 0; this.filterIndex = this.filterSelect.selectedIndex; this.update(); } });
+      this.filterIndex = o.filter;
+    }
     this.zoom = null;
     this.cursorX = null; // hovered data x, or null
     this.cursorPy = null; // pointer's y in px over the plot, or null
@@ -209,12 +252,14 @@ export class Plot {
       class: 'plot-area', tabindex: 0, role: 'group', 'aria-roledescription': 'interactive plot',
       'aria-label': `${o.title || 'plot'}: drag, the wheel or + and − zoom on time, Shift-drag or Page Up and Page Down pan, double-click or Escape reset, arrow keys read values`,
     });
+    // a fixed-size, contained box: redrawing a plot does not lay out the rest of the page
+    this.svgHost.style.height = `${this.o.height}px`;
     this.tip = h('div', { class: 'plot-tip', hidden: true, 'aria-live': 'polite', id: `${this.id}-tip` });
     this.svgHost.setAttribute('aria-describedby', this.tip.id);
     this.legend = h('div', { class: 'legend', role: 'group', 'aria-label': `${o.title || 'plot'} series` });
     this.root = h('figure', { class: 'plot', id: o.id || this.id },
       h('figcaption', { class: 'plot-head' }, h('span', { class: 'plot-title' }, o.title || ''),
-        h('span', { class: 'plot-tools' }, this.reset,
+        h('span', { class: 'plot-tools' }, this.reset, this.filterSelect,
           h('span', { class: 'plot-hint', 'aria-hidden': 'true', title: 'Drag: zoom on time · wheel (click the plot first, or hold Ctrl): zoom · Shift-drag or Shift-wheel: pan · double-click or Escape: reset · legend: show/hide (Shift-click: only this one)' }, '?'))),
       h('div', { class: 'plot-wrap' }, this.svgHost, this.tip),
       this.legend);
@@ -279,7 +324,44 @@ export class Plot {
   setRefLines(lines) { this.refLines = lines || []; this.update(); }
   setXUnit(u) { this.o.xUnit = u; this.update(); }
   /** Fix the unzoomed time axis to [t0, t1] (widened if data fall outside). */
-  setXDomain(t0, t1) { this.o.xDomain = Number.isFinite(t0) && Number.isFinite(t1) && t1 > t0 ? [t0, t1] : null; this.update(); }
+  setXDomain(t0, t1) {
+    this.o.xDomain = Number.isFinite(t0) && Number.isFinite(t1) && t1 > t0 ? [t0, t1] : null;
+    this.updateFilterChoices();
+    this.update();
+  }
+
+  /** Offer filter windows for the time span (the chosen position in the list is kept). */
+  updateFilterChoices() {
+    const sel = this.filterSelect;
+    if (!sel) return;
+    const full = this.fullRange();
+    const ws = filterWindows(full ? full[1] - full[0] : 0);
+    const key = ws.join(',');
+    if (key === this.filterKey) return;
+    this.filterKey = key;
+    sel.replaceChildren(...ws.map((w) => h('option', { value: String(w) }, w ? `mean over ${si(w, 's', 3)}` : 'unfiltered')));
+    const i = Math.min(this.filterIndex, ws.length - 1);
+    sel.selectedIndex = i;
+    this.window = ws[i];
+  }
+
+  /** The series as drawn: filtered when a window is chosen (cached per series). */
+  viewSeries() {
+    const w = this.window;
+    if (!(w > 0)) return this.series;
+    return this.series.map((s) => {
+      const c = s.filtered;
+      const n = s.ys.length;
+      if (c && c.w === w && c.src === s.ys && c.n < n) {
+        // samples were appended: only outputs within w/2 of the new ones change
+        movingMean(s.xs, s.ys, w, lowerBound(s.xs, s.xs[c.n] - w / 2), c.ys);
+        c.n = n;
+      } else if (!c || c.w !== w || c.src !== s.ys || c.n !== n) {
+        s.filtered = { w, src: s.ys, n, ys: movingMean(s.xs, s.ys, w) };
+      }
+      return { ...s, ys: s.filtered.ys };
+    });
+  }
   clear() { this.series = []; this.legendDirty = true; this.update(); }
 
   resetZoom() {
@@ -326,7 +408,7 @@ export class Plot {
     let [x0, x1] = this.zoom || full || [0, 1];
     if (x1 <= x0) { const d = Math.abs(x0) * 0.05 || 1e-9; x0 -= d; x1 += d; }
     let y0 = Infinity, y1 = -Infinity;
-    for (const s of this.series) {
+    for (const s of this.view) {
       if (!s.visible) continue;
       const a = Math.max(0, lowerBound(s.xs, x0) - 1), b = Math.min(s.xs.length, lowerBound(s.xs, x1) + 1);
       for (let i = a; i < b; i++) {
@@ -353,6 +435,8 @@ export class Plot {
 
   render() {
     if (this.legendDirty) this.renderLegend();
+    this.updateFilterChoices();
+    this.view = this.viewSeries();
     const L = (this.L = this.layout());
     this.lastWidth = this.svgHost.clientWidth;
     const { width, height, x0, x1, y0, y1, pw, ph, sx, sy } = L;
@@ -405,7 +489,7 @@ export class Plot {
     }
     // series
     parts.push(`<g class="series" clip-path="url(#${this.id}-clip)">`);
-    for (const s of this.series) {
+    for (const s of this.view) {
       if (!s.visible || !s.xs.length) continue;
       const d = this.pathFor(s, L);
       if (d) parts.push(`<path d="${d}" stroke="${s.color}"${s.dash ? ` stroke-dasharray="${s.dash}"` : ''}/>`);
@@ -418,6 +502,8 @@ export class Plot {
     this.svgHost.innerHTML = parts.join('');
     this.svg = this.svgHost.firstChild;
     this.reset.hidden = !this.zoom;
+    // the shown range and the plot area, for tests and scripts
+    Object.assign(this.root.dataset, { x0: String(x0), x1: String(x1), zoomed: String(Boolean(this.zoom)), areaLeft: String(this.M.left), areaTop: String(this.M.top), areaWidth: String(pw), areaHeight: String(ph) });
     this.renderHover();
   }
 
@@ -448,7 +534,7 @@ export class Plot {
     this.legend.replaceChildren();
     for (const s of this.series) {
       const swatch = h('span', { class: 'swatch', 'aria-hidden': 'true' });
-      swatch.innerHTML = `<svg width="22" height="10"><line x1="1" x2="21" y1="5" y2="5" stroke="${s.color}" stroke-width="2.5"${s.dash ? ` stroke-dasharray="${s.dash}"` : ''}/></svg>`;
+      swatch.innerHTML = swatchSvg(s.color, s.dash);
       const b = h('button', {
         type: 'button', class: 'legend-item', 'aria-pressed': String(s.visible),
         title: 'Show or hide this series (Shift-click: only this one)',
@@ -466,7 +552,7 @@ export class Plot {
     if (this.cursorX === null || !L || !L.hasData) { g.innerHTML = ''; this.tip.hidden = true; return; }
     const x = this.cursorX;
     const xf = this.o.xUnit.factor;
-    const rows = hoverRows(this.series, x);
+    const rows = hoverRows(this.view || this.series, x);
     const marks = rows.filter((r) => Number.isFinite(r.y))
       .map((r) => `<circle cx="${L.sx(r.t).toFixed(1)}" cy="${L.sy(r.y).toFixed(1)}" r="3.5" fill="${r.color}" stroke="#fff"/>`);
     const px = Math.min(Math.max(L.sx(x), this.M.left), this.M.left + L.pw);
@@ -479,11 +565,13 @@ export class Plot {
     g.innerHTML = cross + marks.join('');
     const unit = `${this.yp.prefix}${this.o.yUnit}`;
     const cursorY = cy !== null && cy >= this.M.top && cy <= this.M.top + L.ph ? L.y0 + (1 - (cy - this.M.top) / L.ph) * (L.y1 - L.y0) : null;
-    this.tip.replaceChildren(
+    replace(this.tip,
       h('div', { class: 'tip-x' }, `${this.o.xLabel} = ${num(x / xf, 5)} ${this.o.xUnit.unit}`),
-      ...rows.map(({ key, name, color, t, y }) => {
-        const row = h('div', { class: 'tip-row' },
-          h('span', { class: 'tip-swatch', style: `background:${color}` }),
+      this.window > 0 ? h('div', { class: 'tip-filter muted' }, `mean over ${si(this.window, 's', 3)}`) : null,
+      ...rows.map(({ key, name, color, dash, t, y }) => {
+        const sw = h('span', { class: 'tip-swatch', 'aria-hidden': 'true' });
+        sw.innerHTML = swatchSvg(color, dash);
+        const row = h('div', { class: 'tip-row' }, sw,
           `${name}: `, h('b', {}, `${num(y / this.yp.factor, 4)}${unit ? ` ${unit}` : ''}`));
         // the raw sample, for tests and copy-paste: its time (s) and value (base unit)
         row.dataset.key = key;

@@ -2,7 +2,7 @@
 // selection, nearest sample, thinning, legend state, hover rows. `node --test web/test/`.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { niceTicks, zoomAround, panBy, dragRange, nearestIndex, lowerBound, thinIndices, legendToggle, hoverRows, MIN_SPAN } from '../js/plot.js';
+import { niceTicks, zoomAround, panBy, dragRange, nearestIndex, lowerBound, thinIndices, legendToggle, hoverRows, movingMean, filterWindows, MIN_SPAN } from '../js/plot.js';
 
 const close = (a, b, tol = 1e-12) => Math.abs(a - b) <= tol * Math.max(1, Math.abs(a), Math.abs(b));
 
@@ -108,4 +108,43 @@ test('hover rows hold each visible series\' nearest sample', () => {
   ];
   const rows = hoverRows(series, 1.6e-6);
   assert.deepEqual(rows.map((r) => [r.key, r.t, r.y]), [['v', 2e-6, 600], ['x', 1.9e-6, 0.02]]);
+});
+
+test('the moving mean averages the samples within the window and keeps gaps', () => {
+  const xs = [0, 1, 2, 3, 4, 5];
+  const ys = [0, 10, 0, 10, NaN, 10];
+  const m = movingMean(xs, ys, 2); // ±1
+  assert.deepEqual(m.slice(0, 4), [5, 10 / 3, 20 / 3, 5]);
+  assert.ok(Number.isNaN(m[4]));
+  assert.equal(m[5], 10); // its neighbour within ±1 is the gap
+  assert.equal(movingMean(xs, ys, 0), ys);
+  // a zig-zag becomes its mean
+  const zx = Array.from({ length: 200 }, (_, i) => i * 1e-7);
+  const zy = zx.map((_, i) => (i % 2 ? 1200 : 0));
+  const zm = movingMean(zx, zy, 2e-6);
+  for (let i = 20; i < 180; i++) assert.ok(Math.abs(zm[i] - 600) < 60, `${i}: ${zm[i]}`);
+});
+
+test('filter windows are round fractions of the span', () => {
+  const ws = filterWindows(80e-6);
+  assert.equal(ws[0], 0);
+  assert.ok(ws.includes(1e-6), String(ws));
+  for (const w of ws.slice(1)) {
+    const m = w / 10 ** Math.floor(Math.log10(w) + 1e-9);
+    assert.ok([1, 2, 5].some((x) => close(m, x, 1e-9)) && w < 80e-6 / 10, `${w}`);
+  }
+  assert.deepEqual(filterWindows(0), [0]);
+});
+
+test('a moving mean extended from an index equals the full one', () => {
+  const xs = [], ys = [];
+  for (let i = 0; i < 500; i++) { xs.push(i * 1e-7 + (i % 3) * 1e-9); ys.push(i % 7 === 0 ? NaN : Math.sin(i) * 1000); }
+  const full = movingMean(xs, ys, 1e-6);
+  // the first 300 samples, then 200 appended: recompute from w/2 before the first new one
+  const out = movingMean(xs.slice(0, 300), ys.slice(0, 300), 1e-6);
+  const part = movingMean(xs, ys, 1e-6, lowerBound(xs, xs[300] - 0.5e-6), out);
+  assert.equal(part.length, 500);
+  for (let i = 0; i < 500; i++) {
+    assert.ok(Number.isNaN(full[i]) ? Number.isNaN(part[i]) : Math.abs(part[i] - full[i]) < 1e-9, `${i}`);
+  }
 });

@@ -98,7 +98,7 @@ export function sweepView(main, { id }) {
     h('section', { 'aria-labelledby': 'sweep-plot-h' }, h('h2', { id: 'sweep-plot-h' }, 'Crack-tip speed of every run'), plotGrid),
     h('section', { 'aria-labelledby': 'sweep-jobs-h' }, h('h2', { id: 'sweep-jobs-h' }, 'Runs'), jobsHost));
   const speedPlot = new Plot(plotGrid, {
-    id: 'sweep-speed', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true,
+    id: 'sweep-speed', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true, filter: 2,
     xUnit: { factor: 1e-6, unit: 'µs' }, empty: 'No crack-tip data yet',
   });
   const lengthPlot = new Plot(plotGrid, {
