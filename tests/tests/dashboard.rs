@@ -1046,6 +1046,7 @@ async fn run_steps(c: &Client, base: &str) {
     .await
     .expect("scroll to the top");
     screenshot(c, "run.png", 1280, 3000).await;
+    screenshot(c, "run-phone.png", 390, 2400).await;
     c.set_window_size(1280, 900).await.expect("resize window");
 
     // 3b. Clone opens the scene editor with this run's scene; Rerun makes a linked run
@@ -1121,7 +1122,7 @@ async fn run_steps(c: &Client, base: &str) {
         long,
     )
     .await;
-    wait_js(c, "two runs in the speed overlay", "return document.querySelectorAll('#cmp-speed .legend-item').length >= 2 && document.querySelectorAll('#cmp-speed .series path').length >= 2 && document.querySelectorAll('#cmp-length .series path').length >= 2;", long).await;
+    wait_js(c, "two runs in the speed overlay", "return document.querySelectorAll('#cmp-speed .legend-item').length >= 2 && document.querySelectorAll('#cmp-speed .series path').length >= 2 && document.querySelectorAll('#cmp-length .series path').length >= 2 && document.querySelector('#cmp-speed .plot-filter').selectedOptions[0].textContent.startsWith('mean over');", long).await;
     let legend = c
         .execute("return [...document.querySelectorAll('#cmp-speed .legend-item')].map(b => b.textContent).join('|');", vec![])
         .await
