@@ -38,6 +38,10 @@ pub struct Scene {
     /// Explicit cracks.
     #[serde(default)]
     pub cracks: Vec<Crack>,
+    /// Weak planes held by a cohesive law until they fail (`scene-format.md`,
+    /// `algorithm.md` §8). Omitted when empty, so scenes without them keep their hash.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub interfaces: Vec<Interface>,
     /// Prescribed grid velocities.
     #[serde(default)]
     pub boundary_conditions: Vec<BoundaryCondition>,
@@ -312,6 +316,108 @@ pub struct Crack {
     /// [`JIntegral::default_for`]: the domain integral over a ring of radius 6 cells.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub j_integral: Option<JIntegral>,
+}
+
+/// A cohesive interface: a polyline whose two sides carry separate velocity fields from the
+/// start and are held together by a traction–separation law until it fails; failed parts
+/// behave as a crack with `contact`.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Interface {
+    /// Polyline of at least two points.
+    pub points: Vec<Vec2>,
+    /// The traction–separation law and its mode I and mode II constants.
+    pub cohesive: Cohesive,
+    /// Contact of the failed faces (and of closed faces: compression is always contact).
+    #[serde(default)]
+    pub contact: ContactLaw,
+}
+
+/// A traction–separation law with its normal (mode I) and shear (mode II) constants.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Cohesive {
+    /// The shape of the law.
+    pub law: CohesiveLaw,
+    /// Opening: peak traction σ_c (Pa) and toughness G_Ic (J/m²).
+    pub normal: CohesiveMode,
+    /// Sliding: peak traction τ_c (Pa) and toughness G_IIc (J/m²).
+    pub shear: CohesiveMode,
+}
+
+/// One mode's constants of a cohesive law.
+#[derive(Debug, Clone, Copy, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct CohesiveMode {
+    /// Peak traction (Pa).
+    pub strength: f64,
+    /// Work per unit area to separate fully in this mode (J/m²).
+    pub toughness: f64,
+}
+
+/// Shapes of the traction–separation law, written on the effective separation
+/// λ = sqrt((δ_n/δ_nc)² + (δ_t/δ_tc)²) as T(λ) times the mode's strength
+/// (`docs/scene-extensions.md`).
+#[derive(Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema)]
+#[serde(rename_all = "snake_case")]
+pub enum CohesiveLaw {
+    /// Linear softening from the peak (rigid until the peak): T = 1 − λ on [0, 1],
+    /// δ_c = 2G/σ_c.
+    Linear,
+    /// Xu–Needleman's exponential shape: T = e·λ·e^(−λ), peak at λ = 1, δ_c = G/(e·σ_c).
+    Exponential,
+    /// Needleman's cubic: T = (27/4)·λ(1 − λ)², peak at λ = 1/3, δ_c = 16G/(9σ_c).
+    Cubic,
+}
+
+impl CohesiveLaw {
+    /// T(λ), the traction over the strength on the loading envelope.
+    pub fn shape(self, l: f64) -> f64 {
+        let l = l.max(0.0);
+        match self {
+            CohesiveLaw::Linear => (1.0 - l).max(0.0),
+            CohesiveLaw::Exponential => std::f64::consts::E * l * (-l).exp(),
+            CohesiveLaw::Cubic => {
+                if l >= 1.0 {
+                    0.0
+                } else {
+                    6.75 * l * (1.0 - l) * (1.0 - l)
+                }
+            }
+        }
+    }
+    /// ∫₀^∞ T(λ) dλ: the toughness is strength × δ_c × this.
+    pub fn area(self) -> f64 {
+        match self {
+            CohesiveLaw::Linear => 0.5,
+            CohesiveLaw::Exponential => std::f64::consts::E,
+            CohesiveLaw::Cubic => 9.0 / 16.0,
+        }
+    }
+    /// λ at the peak traction (the elastic branch ends there; unloading past it follows the
+    /// secant to the origin).
+    pub fn peak(self) -> f64 {
+        match self {
+            CohesiveLaw::Linear => 0.0,
+            CohesiveLaw::Exponential => 1.0,
+            CohesiveLaw::Cubic => 1.0 / 3.0,
+        }
+    }
+    /// λ at which a point counts as failed: the law's end (linear, cubic), or where the
+    /// exponential's remaining work is below 10⁻³ of G (λ = 11: (1 + λ)e^(−λ) < 10⁻⁴).
+    pub fn end(self) -> f64 {
+        match self {
+            CohesiveLaw::Linear | CohesiveLaw::Cubic => 1.0,
+            CohesiveLaw::Exponential => 11.0,
+        }
+    }
+}
+
+impl CohesiveMode {
+    /// The characteristic separation δ_c = G/(σ_c·∫T) of this mode under `law` (m).
+    pub fn critical_separation(&self, law: CohesiveLaw) -> f64 {
+        self.toughness / (self.strength * law.area())
+    }
 }
 
 /// How the J-integral of a tip is evaluated (`algorithm.md` §6).

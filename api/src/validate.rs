@@ -484,6 +484,43 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
         }
     }
 
+    // Interfaces.
+    for (i, it) in scene.interfaces.iter().enumerate() {
+        let p = format!("interfaces.{i}");
+        if it.points.len() < 2 {
+            c.err(
+                format!("{p}.points"),
+                &it.points,
+                "needs at least two points",
+            );
+        }
+        for (k, q) in it.points.iter().enumerate() {
+            if c.point(&format!("{p}.points.{k}"), *q)
+                && grid_ok
+                && (q[0] < g.min[0] || q[0] > g.max[0] || q[1] < g.min[1] || q[1] > g.max[1])
+            {
+                c.err(format!("{p}.points.{k}"), q, "lies outside the grid box");
+            }
+        }
+        for k in 1..it.points.len() {
+            let (a, b) = (it.points[k - 1], it.points[k]);
+            if (a[0] - b[0]).hypot(a[1] - b[1]) <= 1e-12 * h.abs().max(1e-300) {
+                c.err(
+                    format!("{p}.points.{k}"),
+                    b,
+                    "repeats the previous point (zero-length segment)",
+                );
+            }
+        }
+        for (mode, m) in [("normal", it.cohesive.normal), ("shear", it.cohesive.shear)] {
+            c.positive(&format!("{p}.cohesive.{mode}.strength"), m.strength);
+            c.positive(&format!("{p}.cohesive.{mode}.toughness"), m.toughness);
+        }
+        if let ContactLaw::Coulomb { friction } = it.contact {
+            c.non_negative(&format!("{p}.contact.friction"), friction);
+        }
+    }
+
     // Boundary conditions.
     for (i, bc) in scene.boundary_conditions.iter().enumerate() {
         let p = format!("boundary_conditions.{i}");

@@ -67,11 +67,14 @@ impl Cracks {
                     let mut other_crack = false;
                     for &(ci, si) in segs {
                         let c = &self.cracks[ci as usize];
+                        // A crack and the interface that continues it are one line with one
+                        // pair of fields: crossings count per group.
+                        let g = c.group;
                         let (pa, pb) = (c.pts[si as usize].x, c.pts[si as usize + 1].x);
                         if crosses(k.x, node, pa, pb) {
                             match &mut hit {
-                                None => hit = Some((ci, 1, left(pa, pb, k.x), seg_normal(pa, pb))),
-                                Some(h) if h.0 == ci => {
+                                None => hit = Some((g, 1, left(pa, pb, k.x), seg_normal(pa, pb))),
+                                Some(h) if h.0 == g => {
                                     h.1 += 1;
                                     h.2 = left(pa, pb, k.x);
                                     h.3 = seg_normal(pa, pb);

@@ -393,6 +393,7 @@ impl Cracks {
                 });
             }
         }
+        rows.extend(self.interface_rows(time));
         rows
     }
 

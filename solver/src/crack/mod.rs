@@ -30,6 +30,7 @@
 //! * Propagation (§7, `propagation.rs`): G ≥ toughness grows the tip by cfl·h (the seed's
 //!   C_L·Δt) in the chosen direction; segments stay at least h/2 long.
 
+mod cohesive;
 mod contact;
 mod domain;
 mod fields;
@@ -39,6 +40,7 @@ mod motion;
 mod propagation;
 mod zone;
 
+pub use cohesive::Bond;
 pub use contact::Stage;
 pub use fields::SlotInfo;
 pub use geometry::crosses;
@@ -74,6 +76,8 @@ pub struct CrackPoint {
     /// The process-zone traction state of a point that growth by the equation of motion
     /// created (`zone.rs`); None for the scene's points and the seed's rule.
     pub zone: Option<Zone>,
+    /// The cohesive state of an interface point (`cohesive.rs`); None for crack points.
+    pub bond: Option<Bond>,
 }
 
 impl CrackPoint {
@@ -87,6 +91,7 @@ impl CrackPoint {
             below: x,
             x0,
             zone: None,
+            bond: None,
         }
     }
 }
@@ -114,6 +119,8 @@ pub struct TipState {
     pub eom_speed: f64,
     /// J and K cached at a time.
     cached_j: Option<(f64, j_integral::TipEval)>,
+    /// The tip lies on an interface, which grows instead of it (`algorithm.md` §8).
+    pub on_interface: bool,
 }
 
 /// One crack.
@@ -129,6 +136,25 @@ pub struct Crack {
     j_method: JIntegral,
     /// Length added at each end by the mouth extension (not reported).
     ext: [f64; 2],
+    /// A cohesive interface (`scene.interfaces`), not a crack of `scene.cracks`.
+    pub interface: bool,
+    /// An interface's fronts (`cohesive.rs`).
+    pub fronts: Fronts,
+    /// The crack whose velocity fields this one shares (its own index, or for an interface
+    /// that continues a crack's tip, that crack's group): one line, one pair of fields.
+    pub group: u32,
+}
+
+/// The fronts of a cohesive interface, as distances along it from its first point (m) and
+/// the index of the crack point there.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct Fronts {
+    /// Farthest fully failed point, connected to a crack or not.
+    pub failure: Option<(f64, usize)>,
+    /// Farthest point past its peak traction (the process zone's front).
+    pub zone: Option<(f64, usize)>,
+    /// Failed length (m): Σ of the failed points' shares.
+    pub failed_length: f64,
 }
 
 impl Crack {
@@ -201,6 +227,23 @@ pub struct Cracks {
     dt: f64,
 }
 
+/// Distance from x to a polyline (m).
+fn polyline_distance(points: &[[f64; 2]], x: [f64; 2]) -> f64 {
+    points
+        .windows(2)
+        .map(|w| {
+            let d = sub(w[1], w[0]);
+            let l2 = d[0] * d[0] + d[1] * d[1];
+            let t = if l2 > 0.0 {
+                (((x[0] - w[0][0]) * d[0] + (x[1] - w[0][1]) * d[1]) / l2).clamp(0.0, 1.0)
+            } else {
+                0.0
+            };
+            dist(x, [w[0][0] + t * d[0], w[0][1] + t * d[1]])
+        })
+        .fold(f64::INFINITY, f64::min)
+}
+
 /// A mass-weighted nodal average at x: Σ S q(n) / Σ S m over the 4 nodes of x's cell (bilinear
 /// S) that `node` gives and that carry mass. None outside the grid or where no such node has
 /// mass.
@@ -237,42 +280,58 @@ impl Cracks {
     /// The cracks of `scene`.
     pub fn new(scene: &Scene, geom: &GridGeom, mats: &[Elastic], scene_dt: f64) -> Self {
         let h = geom.h;
-        let cracks = scene
+        let inside = |p: [f64; 2]| scene.bodies.iter().any(|b| b.region.contains(p));
+        // A polyline subdivided to at most h/2, its ends inside a body tips, the others
+        // mouths pushed 2h outward along their end segment.
+        let polyline = |points: &[[f64; 2]]| {
+            let mut pts = vec![CrackPoint::at(points[0])];
+            for w in points.windows(2) {
+                let n = (dist(w[0], w[1]) / (0.5 * h)).ceil().max(1.0) as usize;
+                for k in 1..=n {
+                    let t = k as f64 / n as f64;
+                    pts.push(CrackPoint::at([
+                        w[0][0] + t * (w[1][0] - w[0][0]),
+                        w[0][1] + t * (w[1][1] - w[0][1]),
+                    ]));
+                }
+            }
+            let mut ext = [0.0; 2];
+            let mut tips = [TipState::default(), TipState::default()];
+            for t in &mut tips {
+                t.g_filtered = f64::NAN;
+            }
+            for end in 0..2 {
+                let n = pts.len();
+                let (i, j) = if end == 0 { (0, 1) } else { (n - 1, n - 2) };
+                if inside(pts[i].x) {
+                    tips[end].active = true;
+                } else {
+                    let d = sub(pts[i].x, pts[j].x);
+                    let l = norm(d).max(1e-300);
+                    let e = 2.0 * h;
+                    let x = [pts[i].x[0] + e * d[0] / l, pts[i].x[1] + e * d[1] / l];
+                    pts[i] = CrackPoint::at(x);
+                    ext[end] = e;
+                }
+            }
+            (pts, tips, ext)
+        };
+        let mut cracks: Vec<Crack> = scene
             .cracks
             .iter()
             .map(|c| {
-                // Subdivide each segment to at most h/2.
-                let mut pts = vec![CrackPoint::at(c.points[0])];
-                for w in c.points.windows(2) {
-                    let n = (dist(w[0], w[1]) / (0.5 * h)).ceil().max(1.0) as usize;
-                    for k in 1..=n {
-                        let t = k as f64 / n as f64;
-                        pts.push(CrackPoint::at([
-                            w[0][0] + t * (w[1][0] - w[0][0]),
-                            w[0][1] + t * (w[1][1] - w[0][1]),
-                        ]));
-                    }
-                }
-                let inside = |p: [f64; 2]| scene.bodies.iter().any(|b| b.region.contains(p));
-                let mut ext = [0.0; 2];
-                let mut tips = [TipState::default(), TipState::default()];
-                for t in &mut tips {
-                    t.g_filtered = f64::NAN;
-                }
-                for end in 0..2 {
-                    let n = pts.len();
-                    let (i, j) = if end == 0 { (0, 1) } else { (n - 1, n - 2) };
-                    if inside(pts[i].x) {
-                        tips[end].active = true;
+                let (pts, mut tips, ext) = polyline(&c.points);
+                // A tip on an interface hands its growth to the interface (§8).
+                for (end, tip) in tips.iter_mut().enumerate() {
+                    let x = if end == 0 {
+                        pts[0].x
                     } else {
-                        // Mouth: extend 2h outward along the end segment.
-                        let d = sub(pts[i].x, pts[j].x);
-                        let l = norm(d).max(1e-300);
-                        let e = 2.0 * h;
-                        let x = [pts[i].x[0] + e * d[0] / l, pts[i].x[1] + e * d[1] / l];
-                        pts[i] = CrackPoint::at(x);
-                        ext[end] = e;
-                    }
+                        pts[pts.len() - 1].x
+                    };
+                    tip.on_interface = scene
+                        .interfaces
+                        .iter()
+                        .any(|it| polyline_distance(&it.points, x) <= 0.25 * h);
                 }
                 Crack {
                     pts,
@@ -281,9 +340,55 @@ impl Cracks {
                     propagation: c.propagation.clone(),
                     j_method: JIntegral::default_for(c, h),
                     ext,
+                    interface: false,
+                    fronts: Fronts::default(),
+                    group: 0,
                 }
             })
             .collect();
+        // Interfaces: cracks from the start whose every point is bonded; their ends are not
+        // tips (no J, no growth: the bond's failure is the growth).
+        for it in &scene.interfaces {
+            let (mut pts, mut tips, ext) = polyline(&it.points);
+            for t in &mut tips {
+                t.active = false;
+            }
+            for p in &mut pts {
+                p.bond = Some(Bond::new(&it.cohesive));
+            }
+            cracks.push(Crack {
+                pts,
+                tips,
+                contact: it.contact.clone(),
+                propagation: Propagation::None,
+                j_method: JIntegral::Domain {
+                    radius: JIntegral::DEFAULT_RADIUS_CELLS * h,
+                },
+                ext,
+                interface: true,
+                fronts: Fronts::default(),
+                group: 0,
+            });
+        }
+        for (i, c) in cracks.iter_mut().enumerate() {
+            c.group = i as u32;
+        }
+        // An interface that a crack tip lies on continues that crack (the notch meets the
+        // bond): it joins the crack's group.
+        let n_cracks = scene.cracks.len();
+        for (ii, it) in scene.interfaces.iter().enumerate() {
+            for ci in 0..n_cracks {
+                let c = &cracks[ci];
+                let ends = [c.pts[0].x, c.pts[c.pts.len() - 1].x];
+                let joins = (0..2).any(|e| {
+                    c.tips[e].on_interface && polyline_distance(&it.points, ends[e]) <= 0.25 * h
+                });
+                if joins {
+                    let g = cracks[ci].group;
+                    cracks[n_cracks + ii].group = g;
+                }
+            }
+        }
         Cracks {
             cracks,
             slots: Vec::new(),

@@ -152,7 +152,8 @@ impl Cracks {
                 else {
                     continue;
                 };
-                if !self.cracks[ci].tips[t].active {
+                let tip_state = &self.cracks[ci].tips[t];
+                if !tip_state.active || tip_state.on_interface {
                     continue;
                 }
                 let tf = self.tip_frame_j(ci, t, v, time);
@@ -325,6 +326,7 @@ impl Cracks {
                 any = true;
             }
         }
+        self.interface_fronts();
         // Tip histories for the moving-box speed.
         let keep = 2.0 * self.speed_window;
         for c in &mut self.cracks {

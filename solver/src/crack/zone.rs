@@ -227,17 +227,20 @@ impl Cracks {
         if !self
             .cracks
             .iter()
-            .any(|c| c.pts.iter().any(|p| p.zone.is_some()))
+            .any(|c| c.pts.iter().any(|p| p.zone.is_some() || p.bond.is_some()))
         {
             return 0.0;
         }
-        let eps = 1e-3 * self.h;
         let thickness = self.thickness;
         let mut total = 0.0;
         for ci in 0..self.cracks.len() {
             let n = self.cracks[ci].pts.len();
             for k in 0..n {
                 let c = &self.cracks[ci];
+                if c.pts[k].bond.is_some() {
+                    total += self.bond_force(ci, k, geom, nodes, f1, slot_of, dt);
+                    continue;
+                }
                 let Some(mut zone) = c.pts[k].zone else {
                     continue;
                 };
@@ -310,83 +313,186 @@ impl Cracks {
                     sigma
                 };
                 let magnitude = sigma * share * thickness * dt;
-                // Nodes of the point's cell with both sides present, bilinear weights.
-                let xi = geom.xi(pt.x);
-                let (cx, cy) = (xi[0].floor(), xi[1].floor());
-                if cx < 0.0 || cy < 0.0 || cx as usize + 1 >= geom.nx || cy as usize + 1 >= geom.ny
-                {
+                let Some(applied) =
+                    self.push_pairs(geom, nodes, f1, slot_of, pt.x, nrm, dt, |w, stick| {
+                        // The traction pulls the above field along −dir; at most as far as
+                        // the stick change goes in that direction.
+                        let reach = -(stick[0] * dir[0] + stick[1] * dir[1]);
+                        let j = (magnitude * w).min(reach.max(0.0));
+                        [-j * dir[0], -j * dir[1]]
+                    })
+                else {
                     self.cracks[ci].pts[k].zone = Some(zone);
                     continue;
-                }
-                let (fx, fy) = (xi[0] - cx, xi[1] - cy);
-                let (cx, cy) = (cx as usize, cy as usize);
-                let from_above = [pt.x[0] - eps * nrm[0], pt.x[1] - eps * nrm[1]];
-                let from_below = [pt.x[0] + eps * nrm[0], pt.x[1] + eps * nrm[1]];
-                let mut applied = [0.0; 2];
-                // At most the 4 nodes of the cell: no allocation per point and step.
-                let mut pairs: [Option<(f64, Field, Field)>; 4] = [None; 4];
-                let mut count = 0;
-                let mut wsum = 0.0;
-                for (a, wa) in [(0, 1.0 - fx), (1, fx)] {
-                    for (b, wb) in [(0, 1.0 - fy), (1, fy)] {
-                        let w = wa * wb;
-                        if w <= 0.0 {
-                            continue;
-                        }
-                        let (ix, iy) = (cx + a, cy + b);
-                        let fa = self.side_field(geom, from_above, ix, iy, slot_of);
-                        let fb = self.side_field(geom, from_below, ix, iy, slot_of);
-                        if let (Some(fa), Some(fb)) = (fa, fb)
-                            && fa != fb
-                        {
-                            pairs[count] = Some((w, fa, fb));
-                            count += 1;
-                            wsum += w;
-                        }
-                    }
-                }
-                if wsum <= 0.0 {
-                    self.cracks[ci].pts[k].zone = Some(zone);
-                    continue;
-                }
-                for (w, fa, fb) in pairs.into_iter().flatten() {
-                    let want = magnitude * w / wsum;
-                    let (na, nb): (&mut Node, &mut Node) = match (fa, fb) {
-                        (Field::Zero(i), Field::One(s)) => (&mut nodes[i], &mut f1[s]),
-                        (Field::One(s), Field::Zero(i)) => (&mut f1[s], &mut nodes[i]),
-                        _ => continue,
-                    };
-                    if na.m <= 0.0 || nb.m <= 0.0 {
-                        continue;
-                    }
-                    // Force-stage momenta and the stick change of the above field.
-                    let pa_ = [na.p[0] + dt * na.f[0], na.p[1] + dt * na.f[1]];
-                    let pb_ = [nb.p[0] + dt * nb.f[0], nb.p[1] + dt * nb.f[1]];
-                    let big_m = na.m + nb.m;
-                    let stick = [
-                        (na.m * pb_[0] - nb.m * pa_[0]) / big_m,
-                        (na.m * pb_[1] - nb.m * pa_[1]) / big_m,
-                    ];
-                    // The traction pulls the above field along −dir; at most as far as the
-                    // stick change goes in that direction.
-                    let reach = -(stick[0] * dir[0] + stick[1] * dir[1]);
-                    let j = want.min(reach.max(0.0));
-                    if j <= 0.0 {
-                        continue;
-                    }
-                    let imp = [-j * dir[0], -j * dir[1]];
-                    for q in 0..2 {
-                        na.f[q] += imp[q] / dt;
-                        nb.f[q] -= imp[q] / dt;
-                        applied[q] += imp[q] / dt;
-                    }
-                }
+                };
                 zone.last = Some((applied, d));
                 self.cracks[ci].pts[k].zone = Some(zone);
             }
         }
         self.zone_work += total;
         total
+    }
+
+    /// Apply a point's traction at the force stage: on each node of the point's cell where
+    /// both sides' fields are present, the impulse `impulse(w, stick)` on the above field and
+    /// its opposite on the below field, with w the node's share of the point (bilinear
+    /// weights over the two-field nodes) and `stick` the change of the above field's momentum
+    /// that would make the two move together. Returns the force applied on the above side
+    /// (N), or None when no node of the cell has both sides.
+    #[allow(clippy::too_many_arguments)]
+    fn push_pairs(
+        &self,
+        geom: &GridGeom,
+        nodes: &mut [Node],
+        f1: &mut [Node],
+        slot_of: &[u32],
+        x: [f64; 2],
+        nrm: [f64; 2],
+        dt: f64,
+        impulse: impl Fn(f64, [f64; 2]) -> [f64; 2],
+    ) -> Option<[f64; 2]> {
+        let eps = 1e-3 * self.h;
+        let xi = geom.xi(x);
+        let (cx, cy) = (xi[0].floor(), xi[1].floor());
+        if cx < 0.0 || cy < 0.0 || cx as usize + 1 >= geom.nx || cy as usize + 1 >= geom.ny {
+            return None;
+        }
+        let (fx, fy) = (xi[0] - cx, xi[1] - cy);
+        let (cx, cy) = (cx as usize, cy as usize);
+        let from_above = [x[0] - eps * nrm[0], x[1] - eps * nrm[1]];
+        let from_below = [x[0] + eps * nrm[0], x[1] + eps * nrm[1]];
+        // At most the 4 nodes of the cell: no allocation per point and step.
+        let mut pairs: [Option<(f64, Field, Field)>; 4] = [None; 4];
+        let mut count = 0;
+        let mut wsum = 0.0;
+        for (a, wa) in [(0, 1.0 - fx), (1, fx)] {
+            for (b, wb) in [(0, 1.0 - fy), (1, fy)] {
+                let w = wa * wb;
+                if w <= 0.0 {
+                    continue;
+                }
+                let (ix, iy) = (cx + a, cy + b);
+                let fa = self.side_field(geom, from_above, ix, iy, slot_of);
+                let fb = self.side_field(geom, from_below, ix, iy, slot_of);
+                if let (Some(fa), Some(fb)) = (fa, fb)
+                    && fa != fb
+                {
+                    pairs[count] = Some((w, fa, fb));
+                    count += 1;
+                    wsum += w;
+                }
+            }
+        }
+        if wsum <= 0.0 {
+            return None;
+        }
+        let mut applied = [0.0; 2];
+        for (w, fa, fb) in pairs.into_iter().flatten() {
+            let (na, nb): (&mut Node, &mut Node) = match (fa, fb) {
+                (Field::Zero(i), Field::One(s)) => (&mut nodes[i], &mut f1[s]),
+                (Field::One(s), Field::Zero(i)) => (&mut f1[s], &mut nodes[i]),
+                _ => continue,
+            };
+            if na.m <= 0.0 || nb.m <= 0.0 {
+                continue;
+            }
+            // Force-stage momenta and the stick change of the above field.
+            let pa_ = [na.p[0] + dt * na.f[0], na.p[1] + dt * na.f[1]];
+            let pb_ = [nb.p[0] + dt * nb.f[0], nb.p[1] + dt * nb.f[1]];
+            let big_m = na.m + nb.m;
+            let stick = [
+                (na.m * pb_[0] - nb.m * pa_[0]) / big_m,
+                (na.m * pb_[1] - nb.m * pa_[1]) / big_m,
+            ];
+            let imp = impulse(w / wsum, stick);
+            for q in 0..2 {
+                na.f[q] += imp[q] / dt;
+                nb.f[q] -= imp[q] / dt;
+                applied[q] += imp[q] / dt;
+            }
+        }
+        Some(applied)
+    }
+
+    /// The cohesive traction of interface point k of crack ci (`cohesive.rs`) at the force
+    /// stage; returns the work booked for its last step (J).
+    #[allow(clippy::too_many_arguments)]
+    fn bond_force(
+        &mut self,
+        ci: usize,
+        k: usize,
+        geom: &GridGeom,
+        nodes: &mut [Node],
+        f1: &mut [Node],
+        slot_of: &[u32],
+        dt: f64,
+    ) -> f64 {
+        let c = &self.cracks[ci];
+        let n = c.pts.len();
+        let pt: CrackPoint = c.pts[k];
+        let Some(mut bond) = pt.bond else {
+            return 0.0;
+        };
+        let back = if k > 0 {
+            dist(c.pts[k - 1].x0, pt.x0)
+        } else {
+            0.0
+        };
+        let fore = if k + 1 < n {
+            dist(pt.x0, c.pts[k + 1].x0)
+        } else {
+            0.0
+        };
+        bond.share = 0.5 * (back + fore);
+        let nrm = c.local_normal(k); // above → below
+        let up = [-nrm[0], -nrm[1]];
+        let tan = [nrm[1], -nrm[0]];
+        let d = [pt.above[0] - pt.below[0], pt.above[1] - pt.below[1]];
+        // Work of last step's force over the separation the surfaces opened since. (The
+        // impulses' work at the fields' end-of-step velocities is zero wherever they stick the
+        // two fields, which they do at most nodes: the faces open through the particles'
+        // motion, which the surfaces follow.)
+        let mut w = 0.0;
+        if let Some((f, d0)) = bond.last.take() {
+            w = -(f[0] * (d[0] - d0[0]) + f[1] * (d[1] - d0[1]));
+            bond.work += w;
+        }
+        let dn = (d[0] * up[0] + d[1] * up[1]).max(0.0);
+        let dtn = d[0] * tan[0] + d[1] * tan[1];
+        let traction = bond.traction(dn, dtn);
+        let area_dt = bond.share * self.thickness * dt;
+        // Impulse components (normal, tangential) on the above side, signed; None: rigid.
+        let want = match traction {
+            Some(t) if t == [0.0; 2] => None,
+            Some(t) => Some(Some([-t[0] * area_dt, -t[1] * area_dt])),
+            None => Some(None),
+        };
+        if let (Some(want), true) = (want, area_dt > 0.0) {
+            let caps = [bond.strength[0] * area_dt, bond.strength[1] * area_dt];
+            let applied = self.push_pairs(geom, nodes, f1, slot_of, pt.x, nrm, dt, |wf, stick| {
+                let s = [
+                    stick[0] * up[0] + stick[1] * up[1],
+                    stick[0] * tan[0] + stick[1] * tan[1],
+                ];
+                // Rigid (undamaged linear law): whatever keeps the fields together, up to
+                // the strengths (the normal part only in tension).
+                let want = want.unwrap_or([-caps[0], s[1].signum() * caps[1]]);
+                let mut j = [0.0; 2];
+                for q in 0..2 {
+                    let wq = want[q] * wf;
+                    // Only against the separating motion, and never past the stick change.
+                    if wq * s[q] > 0.0 {
+                        j[q] = wq.signum() * wq.abs().min(s[q].abs());
+                    }
+                }
+                [j[0] * up[0] + j[1] * tan[0], j[0] * up[1] + j[1] * tan[1]]
+            });
+            if let Some(a) = applied {
+                bond.last = Some((a, d));
+            }
+        }
+        self.cracks[ci].pts[k].bond = Some(bond);
+        w
     }
 }
 
