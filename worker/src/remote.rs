@@ -73,16 +73,19 @@ pub struct WorkerConfig {
     pub worker_id: String,
     /// Jobs whose memory estimate exceeds this fail before they are built (bytes).
     pub max_memory: Option<u64>,
+    /// Tell a supervising parent on stdout which claim this process holds
+    /// ([`crate::supervise`]): `HOLDS <job> <fence>` after a claim, `IDLE` when it ends.
+    pub announce_claims: bool,
 }
 
 /// How long uploads are retried while the server answers 507 (its disk is full).
 pub const STORAGE_BUDGET: Duration = Duration::from_secs(120);
 
 /// A small blocking client for the worker routes.
-struct Api {
-    http: Client,
-    base: String,
-    token: String,
+pub(crate) struct Api {
+    pub(crate) http: Client,
+    pub(crate) base: String,
+    pub(crate) token: String,
 }
 
 impl Api {
@@ -111,7 +114,7 @@ impl Api {
         })
     }
 
-    fn post_json<T: serde::Serialize>(
+    pub(crate) fn post_json<T: serde::Serialize>(
         &self,
         path: &str,
         body: &T,
@@ -138,7 +141,7 @@ impl Api {
 
     /// Retry transient failures for up to `budget`, and a server without storage (507)
     /// for up to [`STORAGE_BUDGET`] (its disk may be freed).
-    fn retry<T>(
+    pub(crate) fn retry<T>(
         &self,
         budget: Duration,
         mut f: impl FnMut() -> Result<T, ClientError>,
@@ -246,6 +249,9 @@ fn failed_summary(scene: Option<&Scene>, failure: FailureKind, message: String) 
 fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
     let job = claim.job_id.clone();
     let fence = claim.fence;
+    if cfg.announce_claims {
+        crate::supervise::announce(Some((&job, fence)));
+    }
     tracing::info!(job = %job, attempt = claim.attempt, "running");
     let cancel = Arc::new(AtomicBool::new(false));
     let lost = Arc::new(AtomicBool::new(false));
@@ -342,6 +348,9 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
     }
     let _ = stop_tx.send(());
     let _ = hb.join();
+    if cfg.announce_claims {
+        crate::supervise::announce(None);
+    }
     tracing::info!(job = %job, status = ?summary.status, "run ended");
 }
 
