@@ -567,6 +567,30 @@ mod tests {
         format!("http://{addr}")
     }
 
+    /// The memory cap is enforced: while it is set, an allocation beyond it fails (here
+    /// `try_reserve`, which reports what would abort a run: "memory allocation of N bytes
+    /// failed"), and the previous limit is back once it is dropped.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn the_memory_cap_makes_a_larger_allocation_fail_and_is_lifted() {
+        use rustix::process::{Resource, getrlimit};
+        let before = getrlimit(Resource::As);
+        let estimate = 64u64 << 20;
+        {
+            let _cap = MemoryCap::set(estimate, 1);
+            let cap = getrlimit(Resource::As).current.expect("a cap is set");
+            let now = current_address_space().unwrap();
+            // Current address space + 1.5 × estimate + 1 GiB + 128 MiB per thread.
+            assert!(cap >= now && cap - now <= estimate * 3 / 2 + (1 << 30) + (128 << 20));
+            let mut v: Vec<u8> = Vec::new();
+            assert!(
+                v.try_reserve_exact(cap as usize).is_err(),
+                "an allocation of the whole cap succeeded under it"
+            );
+        }
+        assert_eq!(getrlimit(Resource::As), before, "the cap was not lifted");
+    }
+
     /// A server whose disk is full (507) is not a transient failure to burn retries and
     /// attempts on: the worker sees `Storage` with the server's message.
     #[test]

@@ -199,7 +199,10 @@ fn run_child(s: &Supervisor) -> std::io::Result<Ended> {
     if let Some(t) = err_thread {
         let _ = t.join();
     }
-    let tail = tail.lock().map(|t| t.iter().cloned().collect()).unwrap_or_default();
+    let tail = tail
+        .lock()
+        .map(|t| t.iter().cloned().collect())
+        .unwrap_or_default();
     Ok(Ended {
         status,
         claim,

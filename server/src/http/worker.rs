@@ -271,7 +271,10 @@ pub(super) async fn worker_died(
     ApiJson(d): ApiJson<WorkerDied>,
 ) -> Result<Json<JobInfo>, ApiError> {
     let cause: String = if d.cause.chars().count() > MAX_CAUSE_CHARS {
-        format!("{}…", d.cause.chars().take(MAX_CAUSE_CHARS).collect::<String>())
+        format!(
+            "{}…",
+            d.cause.chars().take(MAX_CAUSE_CHARS).collect::<String>()
+        )
     } else {
         d.cause
     };

@@ -188,7 +188,9 @@ impl Store {
     ) -> Result<Vec<JobRow>, StoreError> {
         let mut tx = self.pool.begin().await?;
         // Constant text: only the WHERE clause differs between the two releases.
-        let sql = format!("{RELEASE} WHERE status = 'running' AND substr(worker_id, 1, length(?4)) = ?4 RETURNING *");
+        let sql = format!(
+            "{RELEASE} WHERE status = 'running' AND substr(worker_id, 1, length(?4)) = ?4 RETURNING *"
+        );
         let rows = sqlx::query(sqlx::AssertSqlSafe(sql))
             .bind(max_attempts as i64)
             .bind(deterministic)
@@ -213,7 +215,8 @@ impl Store {
     ) -> Result<JobRow, StoreError> {
         let mut tx = self.pool.begin().await?;
         // Constant text: only the WHERE clause differs between the two releases.
-        let sql = format!("{RELEASE} WHERE status = 'running' AND id = ?4 AND fence = ?5 RETURNING *");
+        let sql =
+            format!("{RELEASE} WHERE status = 'running' AND id = ?4 AND fence = ?5 RETURNING *");
         let row = sqlx::query(sqlx::AssertSqlSafe(sql))
             .bind(max_attempts as i64)
             .bind(deterministic)
