@@ -79,3 +79,71 @@ pub struct FinishRequest {
     /// The run summary.
     pub summary: Summary,
 }
+
+/// `POST /api/v1/worker/jobs/{id}/died`: sent by the supervisor of a remote worker
+/// (`fracture worker`) when its worker process died while it held the job, so the server
+/// releases the job at once (not after its lease) with the cause in its message.
+#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct WorkerDied {
+    /// Fencing token of the claim the dead process held.
+    pub fence: i64,
+    /// How the process ended and its last output ([`exit_cause`]).
+    pub cause: String,
+}
+
+/// Lines of a worker's stderr kept for the message of the job it held when it died.
+pub const STDERR_TAIL: usize = 8;
+
+/// Why a worker process ended, for people: the signal or exit status, what it usually
+/// means, and the last lines of its stderr (`tail`).
+pub fn exit_cause(status: &std::process::ExitStatus, tail: &[String]) -> String {
+    #[cfg(unix)]
+    let how = {
+        use std::os::unix::process::ExitStatusExt;
+        match (status.signal(), status.code()) {
+            (Some(9), _) => "killed by signal 9 (SIGKILL: e.g. the out-of-memory killer)".into(),
+            (Some(6), _) => "aborted (signal 6, SIGABRT: e.g. a failed memory allocation)".into(),
+            (Some(7), _) => {
+                "killed by signal 7 (SIGBUS: e.g. a full or vanished file system)".into()
+            }
+            (Some(11), _) => "killed by signal 11 (SIGSEGV)".into(),
+            (Some(15), _) => "stopped by signal 15 (SIGTERM)".into(),
+            (Some(sig), _) => format!("killed by signal {sig}"),
+            (None, Some(code)) => format!("exited with status {code}"),
+            (None, None) => "ended".into(),
+        }
+    };
+    #[cfg(not(unix))]
+    let how = format!("exited ({status})");
+    // The log lines worth showing: without the colour codes of the log prefix, short.
+    let lines: Vec<String> = tail
+        .iter()
+        .map(|l| {
+            let l: String = l.chars().filter(|c| *c != '\u{1b}').collect();
+            let l = l.trim();
+            if l.chars().count() > 300 {
+                format!("{}…", l.chars().take(300).collect::<String>())
+            } else {
+                l.to_string()
+            }
+        })
+        .filter(|l| !l.is_empty())
+        .collect();
+    if lines.is_empty() {
+        how
+    } else {
+        format!("{how}; its last output: {}", lines.join(" | "))
+    }
+}
+
+/// Whether a worker's exit cause shows that it ran out of memory (a failed allocation
+/// under its cap): the job would fail the same way again, so it is failed at once.
+pub fn ran_out_of_memory(cause: &str) -> bool {
+    [
+        "memory allocation of",
+        "out of memory",
+        "Cannot allocate memory",
+    ]
+    .iter()
+    .any(|m| cause.contains(m))
+}

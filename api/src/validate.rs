@@ -217,6 +217,39 @@ impl std::ops::Deref for ValidScene {
     }
 }
 
+/// Constants that are each valid can still give a dilatational wave speed that is not a
+/// finite positive number (E/ρ overflows or underflows: density 1e-300), and so no time
+/// step: name the more extreme of the two constants, with its value.
+fn wave_speed(c: &mut Checker, p: &str, rho: f64, e: f64, nu: f64, analysis: Analysis) {
+    let ok = |x: f64| x.is_finite() && x > 0.0;
+    if !(ok(rho) && ok(e) && nu > -1.0 && nu < 0.5) {
+        return; // already reported
+    }
+    let c_l = crate::scene::WaveSpeeds::new(e, nu, rho, analysis).c_l;
+    if ok(c_l) {
+        return;
+    }
+    let (field, value) = if rho.log10().abs() >= e.log10().abs() {
+        ("density", rho)
+    } else {
+        ("youngs_modulus", e)
+    };
+    let what = if c_l.is_finite() {
+        "underflows to 0"
+    } else {
+        "overflows"
+    };
+    c.err(
+        format!("{p}.{field}"),
+        value,
+        format!(
+            "makes the dilatational wave speed c_L = √(E(1−ν)/((1+ν)(1−2ν)ρ)) not a finite \
+             positive number (E/ρ = {e:e} / {rho:e} {what}), so there is no time step: \
+             give the constants in SI units (kg/m³, Pa)"
+        ),
+    );
+}
+
 /// Validate a scene. Returns the run size, or every problem found.
 pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
     let mut c = Checker { errors: Vec::new() };
@@ -276,6 +309,15 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
         let np = format!("{p}.poissons_ratio");
         if c.finite(&np, nu) && !(nu > -1.0 && nu < 0.5) {
             c.err(np, nu, "is outside (-1, 0.5)");
+        } else {
+            wave_speed(
+                &mut c,
+                &p,
+                m.density(),
+                m.youngs_modulus(),
+                nu,
+                scene.analysis,
+            );
         }
     }
 
@@ -601,10 +643,12 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
             // A density or modulus so extreme that c_L (and so Δt) is not a number: name the
             // material constants rather than "NaN steps".
             c.err(
-                "materials",
-                time_step,
-                "give a wave speed c_L = √(E(1−ν)/((1+ν)(1−2ν)ρ)) that is not a finite \
-                 positive number (check density and youngs_modulus), so there is no time step",
+                "grid.cell_size",
+                h,
+                format!(
+                    "gives a time step Δt = cfl·h/c_L = {time_step:e} s that is not a finite \
+                     positive number"
+                ),
             );
         } else if !(s.is_finite() && s < 1e12) {
             c.err(

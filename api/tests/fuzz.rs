@@ -55,12 +55,8 @@ fn walk_is_small(s: &Scene) -> bool {
     if !(h.is_finite() && h > 0.0) {
         return true; // validation stops at the grid
     }
-    // A grid of more than 10¹⁵ nodes a side overflows validation's node count
-    // (`huge_grid_does_not_overflow_validation`, below); the service refuses it before
-    // validating (`Limits::precheck`, memory estimate).
-    if cost::grid_dims(s).is_some_and(|(nx, ny)| nx == u64::MAX || ny == u64::MAX) {
-        return false;
-    }
+    // Grids of any size are fine: validation saturates its node count and refuses them
+    // before the walk (`huge_grid_is_refused_by_validation`, below).
     let mut sites = 0f64;
     for b in &s.bodies {
         let (lo, hi) = b.region.bounds();
@@ -326,22 +322,43 @@ fn every_example_scene_parses() {
     }
 }
 
-/// Found by this fuzz test: a grid of more than 2⁶⁴ nodes a side overflows the node count
-/// of `validate` (`api/src/validate.rs`, `… .ceil() as u64 + 1`): a panic in debug builds,
-/// a wrap to a small count in release. The service refuses such grids before validation
-/// (memory estimate, `server/tests/safety.rs`); `fracture validate` does not. Ignored until
-/// validate.rs saturates (its owner's file).
+/// Found by this fuzz test: a grid of more than 2⁶⁴ nodes a side overflowed the node count
+/// of `validate` (`… .ceil() as u64 + 1`: a panic in debug builds, a wrap to a small count
+/// in release). It saturates now, and the grid is refused naming `grid.cell_size`.
 #[test]
-fn huge_grid_does_not_overflow_validation() {
+fn huge_grid_is_refused_by_validation() {
     let mut v = examples()[0].clone();
     v["grid"]["cell_size"] = json!(1e-300);
     v["grid"]["max"] = json!([1e300, 1e300]);
     let scene = scene_from_value(v).unwrap();
     let r = std::panic::catch_unwind(|| validate(&scene));
-    let ok = matches!(&r, Ok(Err(_)));
+    let ok = matches!(&r, Ok(Err(e)) if e.0.iter().any(|d| d.path == "grid.cell_size"
+        && d.reason.contains(&u64::MAX.to_string())));
     assert!(
         ok,
-        "validate must refuse the grid with a path, got {:?}",
+        "validate must refuse the grid at grid.cell_size with a saturated count, got {:?}",
         r.map(|x| x.map(|s| s.grid_nodes))
     );
+}
+
+/// Constants that are each valid but whose wave speed overflows (density 1e-300) are
+/// refused naming the density and its value, not as a run that "needs NaN steps".
+#[test]
+fn overflowing_wave_speed_names_the_density() {
+    let mut v = examples()[0].clone();
+    let name = v["materials"]
+        .as_object()
+        .unwrap()
+        .keys()
+        .next()
+        .unwrap()
+        .clone();
+    v["materials"][&name]["density"] = json!(1e-300);
+    let e = validate(&scene_from_value(v).unwrap()).unwrap_err();
+    let path = format!("materials.{name}.density");
+    assert!(
+        e.0.iter().any(|d| d.path == path && d.value == "1e-300"),
+        "{e}"
+    );
+    assert!(!e.to_string().contains("NaN"), "{e}");
 }

@@ -1,4 +1,5 @@
-//! The client commands: `worker` (a remote worker process), `submit` and `sweep`.
+//! The client commands: `worker` (a remote worker: a supervisor and its worker process),
+//! `submit` and `sweep`.
 
 use std::path::PathBuf;
 use std::process::ExitCode;
@@ -8,6 +9,7 @@ use fracture_api::jobs::JobStatus;
 use fracture_server::server::random_hex;
 use fracture_server::service::init_tracing;
 use fracture_worker::remote::{self, WorkerConfig};
+use fracture_worker::supervise::Supervisor;
 
 use crate::client::{self, SubmitConfig, SubmitOutcome};
 
@@ -40,6 +42,10 @@ pub struct WorkerArgs {
     /// Fail jobs whose memory estimate exceeds this many bytes before building them.
     #[arg(long, env = "FRACTURE_WORKER_MAX_MEMORY_BYTES")]
     pub max_memory_bytes: Option<u64>,
+    /// Run the worker loop in this process, reporting its claims on stdout: the child of
+    /// the supervisor that `fracture worker` is otherwise (`fracture_worker::supervise`).
+    #[arg(long, hide = true)]
+    pub supervised_child: bool,
 }
 
 /// Arguments of `fracture submit`.
@@ -246,9 +252,30 @@ pub fn sweep(a: SweepArgs) -> ExitCode {
     }
 }
 
-/// `fracture worker`.
+/// `fracture worker`: a supervisor that runs the worker loop in a child process and
+/// reports the child's death for the job it held; the loop itself in a server's local
+/// workers (`--parent-pid`) and in the supervised child.
 pub fn worker(a: WorkerArgs) -> ExitCode {
     init_tracing();
+    if a.parent_pid.is_none() && !a.supervised_child {
+        match std::env::current_exe() {
+            Ok(exe) => {
+                let mut args: Vec<std::ffi::OsString> = std::env::args_os().skip(1).collect();
+                args.push("--supervised-child".into());
+                let code = fracture_worker::supervise::supervise(&Supervisor {
+                    exe,
+                    args,
+                    server: a.server,
+                    token: a.token,
+                });
+                return ExitCode::from(u8::try_from(code).unwrap_or(1));
+            }
+            Err(e) => tracing::warn!(
+                error = %e,
+                "cannot find this executable: running unsupervised (a death is seen by the lease)"
+            ),
+        }
+    }
     let host = std::fs::read_to_string("/etc/hostname")
         .map(|h| h.trim().to_string())
         .unwrap_or_else(|_| "host".into());
@@ -266,6 +293,7 @@ pub fn worker(a: WorkerArgs) -> ExitCode {
             random_hex(3)
         ),
         max_memory: a.max_memory_bytes,
+        announce_claims: a.supervised_child,
     };
     match remote::run_worker(cfg) {
         Ok(()) => ExitCode::SUCCESS,

@@ -530,3 +530,23 @@ fn bench_skip_and_throughput_matrix_run_ci_sized() {
     assert_eq!(v["runs"].as_array().unwrap().len(), 3);
     assert!(out.join("throughput.csv").is_file());
 }
+
+#[test]
+fn overflowing_wave_speed_names_the_density() {
+    // Each constant is positive, but E/ρ overflows: no time step (it was "needs NaN steps").
+    let text = with(|s| s["materials"]["plate"]["density"] = json!(1e-300));
+    assert_invalid(&text, "materials.plate.density: 1e-300", "overflows");
+    let dir = tempfile::tempdir().unwrap();
+    let file = write(dir.path(), "scene.json", &text);
+    let err = stderr(&fracture(&["validate", file.to_str().unwrap()]));
+    assert!(!err.contains("NaN"), "{err}");
+}
+
+#[test]
+fn grid_beyond_two_to_the_64_nodes_a_side_is_named() {
+    let text = with(|s| {
+        s["grid"]["cell_size"] = json!(1e-300);
+        s["grid"]["max"] = json!([1e300, 1e300]);
+    });
+    assert_invalid(&text, "grid.cell_size", &u64::MAX.to_string());
+}

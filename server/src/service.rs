@@ -13,6 +13,8 @@ use std::time::Duration;
 use clap::Parser;
 use tokio::process::{Child, Command};
 
+use fracture_api::protocol::{STDERR_TAIL, exit_cause};
+
 use crate::config::{Config, Limits};
 use crate::files::JobFiles;
 use crate::server::{AppState, random_hex};
@@ -446,9 +448,6 @@ struct Workers {
     max_memory: u64,
 }
 
-/// Lines of a worker's stderr kept for the message of the job it held when it died.
-const STDERR_TAIL: usize = 8;
-
 fn spawn_worker(exe: &Path, w: &Workers, token: &str, slot: usize) -> std::io::Result<Child> {
     let child = Command::new(exe)
         .arg("worker")
@@ -507,48 +506,6 @@ fn tee_stderr(
     }))
 }
 
-/// Why a worker process ended, for people: the signal or exit status, what it usually
-/// means, and the last lines of its stderr.
-pub fn exit_cause(status: &std::process::ExitStatus, tail: &[String]) -> String {
-    #[cfg(unix)]
-    let how = {
-        use std::os::unix::process::ExitStatusExt;
-        match (status.signal(), status.code()) {
-            (Some(9), _) => "killed by signal 9 (SIGKILL: e.g. the out-of-memory killer)".into(),
-            (Some(6), _) => "aborted (signal 6, SIGABRT: e.g. a failed memory allocation)".into(),
-            (Some(7), _) => {
-                "killed by signal 7 (SIGBUS: e.g. a full or vanished file system)".into()
-            }
-            (Some(11), _) => "killed by signal 11 (SIGSEGV)".into(),
-            (Some(15), _) => "stopped by signal 15 (SIGTERM)".into(),
-            (Some(sig), _) => format!("killed by signal {sig}"),
-            (None, Some(code)) => format!("exited with status {code}"),
-            (None, None) => "ended".into(),
-        }
-    };
-    #[cfg(not(unix))]
-    let how = format!("exited ({status})");
-    // The log lines worth showing: strip the tracing prefix's colour codes, keep them short.
-    let lines: Vec<String> = tail
-        .iter()
-        .map(|l| {
-            let l: String = l.chars().filter(|c| *c != '\u{1b}').collect();
-            let l = l.trim();
-            if l.chars().count() > 300 {
-                format!("{}…", l.chars().take(300).collect::<String>())
-            } else {
-                l.to_string()
-            }
-        })
-        .filter(|l| !l.is_empty())
-        .collect();
-    if lines.is_empty() {
-        how
-    } else {
-        format!("{how}; its last output: {}", lines.join(" | "))
-    }
-}
-
 /// Keep the local worker processes alive until shutdown, then stop them. When one exits
 /// while it holds a job, the job is released at once with the exit cause in its message
 /// (re-queued, or failed past the attempt limit or when the cause is memory).
@@ -604,7 +561,9 @@ async fn supervise_workers(st: AppState, w: Workers) {
                             Err(e) => format!("lost ({e})"),
                         };
                         tracing::warn!(slot, cause = %cause, "worker exited; restarting");
-                        release_jobs_of(&st, &id_prefix, &cause).await;
+                        if let Err(e) = release_dead(&st, DeadWorker::Prefix(&id_prefix), &cause).await {
+                            tracing::error!(error = %e, "cannot release the jobs of a dead worker");
+                        }
                         if started.elapsed() > Duration::from_secs(10) {
                             backoff = Duration::from_millis(200);
                         }
@@ -626,32 +585,45 @@ async fn supervise_workers(st: AppState, w: Workers) {
     }
 }
 
-/// Release the jobs a dead worker (ids starting with `id_prefix`) held, with its exit cause
-/// in their message.
-async fn release_jobs_of(st: &AppState, id_prefix: &str, cause: &str) {
-    let memory = [
-        "memory allocation of",
-        "out of memory",
-        "Cannot allocate memory",
-    ]
-    .iter()
-    .any(|m| cause.contains(m));
-    match st
-        .store
-        .release_worker(id_prefix, cause, st.cfg.max_attempts, memory)
-        .await
-    {
-        Ok(rows) => {
-            for j in rows {
-                tracing::warn!(job = %j.id, status = j.status.as_str(), "the job's worker died");
-                if j.status.is_terminal() {
-                    let files = st.files.clone();
-                    let id = j.id.clone();
-                    let _ = tokio::task::spawn_blocking(move || files.finish(&id)).await;
-                }
-                st.announce(&j);
-            }
+/// The jobs a dead worker held: all those of a local worker process (worker ids starting
+/// with this prefix), or the one claim a remote worker's supervisor reports.
+pub(crate) enum DeadWorker<'a> {
+    /// A local worker: every running job whose worker id starts with this.
+    Prefix(&'a str),
+    /// A remote worker's claim: the job and its fence.
+    Claim(&'a str, i64),
+}
+
+/// Release the jobs a dead worker held, with its exit cause in their message: re-queued,
+/// or failed past `--max-attempts` or at once when the cause shows it ran out of memory
+/// (it would again), or cancelled if that was asked. Returns the released jobs.
+pub(crate) async fn release_dead(
+    st: &AppState,
+    who: DeadWorker<'_>,
+    cause: &str,
+) -> Result<Vec<crate::store::JobRow>, crate::store::StoreError> {
+    let memory = fracture_api::protocol::ran_out_of_memory(cause);
+    let rows = match who {
+        DeadWorker::Prefix(p) => {
+            st.store
+                .release_worker(p, cause, st.cfg.max_attempts, memory)
+                .await?
         }
-        Err(e) => tracing::error!(error = %e, "cannot release the jobs of a dead worker"),
+        DeadWorker::Claim(id, fence) => vec![
+            st.store
+                .release_claim(id, fence, cause, st.cfg.max_attempts, memory)
+                .await?,
+        ],
+    };
+    for j in &rows {
+        tracing::warn!(job = %j.id, status = j.status.as_str(), cause, "the job's worker died");
+        if j.status.is_terminal() {
+            let files = st.files.clone();
+            let id = j.id.clone();
+            let _ = tokio::task::spawn_blocking(move || files.finish(&id)).await;
+        }
+        st.announce(j);
     }
+    st.queue_changed.notify_waiters();
+    Ok(rows)
 }

@@ -467,6 +467,7 @@ async fn worker_routes_check_the_token_before_the_body() {
         "/api/v1/worker/jobs/x/heartbeat",
         "/api/v1/worker/jobs/x/energy",
         "/api/v1/worker/jobs/x/finish",
+        "/api/v1/worker/jobs/x/died",
     ] {
         let (s, v) = call(&st, post(uri, "{not json", None)).await;
         assert_eq!(s, StatusCode::UNAUTHORIZED, "{uri}: {v}");
@@ -514,15 +515,13 @@ async fn a_corrupt_row_is_a_500_not_a_default() {
     let st = state(dir.path(), None).await;
     let (_, job) = call(&st, post("/api/v1/jobs", scene().to_string(), None)).await;
     let id = job["id"].as_str().unwrap().to_string();
-    // Another connection to the same file damages the row's labels.
-    let opts = sqlx::sqlite::SqliteConnectOptions::new().filename(dir.path().join("t.db"));
-    let pool = sqlx::SqlitePool::connect_with(opts).await.unwrap();
+    // A raw statement on the store's connection (it holds the file's exclusive lock)
+    // damages the row's labels.
     sqlx::query("UPDATE jobs SET labels = 'not json' WHERE id = ?")
         .bind(&id)
-        .execute(&pool)
+        .execute(st.store.pool())
         .await
         .unwrap();
-    pool.close().await;
     let (s, v) = call(&st, get(&format!("/api/v1/jobs/{id}"))).await;
     assert_eq!(s, StatusCode::INTERNAL_SERVER_ERROR, "{v}");
     assert_error_body(&v, "internal");
@@ -532,4 +531,60 @@ async fn a_corrupt_row_is_a_500_not_a_default() {
     );
     let err = st.store.get(&id).await.unwrap_err();
     assert!(err.to_string().contains("`labels`"), "{err}");
+}
+
+/// The death report of a remote worker's supervisor (`POST /worker/jobs/{id}/died`):
+/// fenced like every worker write, it re-queues the job with the cause in its message, a
+/// repeated or stale report is 409, and a cause showing the worker ran out of memory
+/// fails the job at once (it would again), as for a local worker.
+#[tokio::test]
+async fn a_reported_worker_death_releases_the_claim_by_the_local_rules() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let (_, job) = call(&st, post("/api/v1/jobs", scene().to_string(), None)).await;
+    let id = job["id"].as_str().unwrap().to_string();
+    let claim = |worker: &str| {
+        post(
+            "/api/v1/worker/claim",
+            json!({"worker_id": worker, "wait_seconds": 0}).to_string(),
+            Some("wt"),
+        )
+    };
+    let died = |fence: i64, cause: &str| {
+        post(
+            &format!("/api/v1/worker/jobs/{id}/died"),
+            json!({"fence": fence, "cause": cause}).to_string(),
+            Some("wt"),
+        )
+    };
+    let (_, c) = call(&st, claim("remote-1")).await;
+    let fence = c["fence"].as_i64().unwrap();
+    // A wrong fence changes nothing.
+    let (s, v) = call(&st, died(fence + 1, "killed by signal 9")).await;
+    assert_eq!(s, StatusCode::CONFLICT, "{v}");
+    let (_, j) = call(&st, get(&format!("/api/v1/jobs/{id}"))).await;
+    assert_eq!(j["status"], "running", "{j}");
+    let cause = "killed by signal 9 (SIGKILL: e.g. the out-of-memory killer)";
+    let (s, j) = call(&st, died(fence, cause)).await;
+    assert_eq!(s, StatusCode::OK, "{j}");
+    assert_eq!(j["status"], "queued", "{j}");
+    assert!(j["message"].as_str().unwrap().contains(cause), "{j}");
+    // Released once: the same report again is stale.
+    let (s, _) = call(&st, died(fence, cause)).await;
+    assert_eq!(s, StatusCode::CONFLICT);
+    // Out of memory: failed at once although attempts are left.
+    let (_, c) = call(&st, claim("remote-2")).await;
+    assert_eq!(c["attempt"], 2);
+    let oom = "aborted (signal 6, SIGABRT: e.g. a failed memory allocation); its last \
+               output: memory allocation of 20412450768 bytes failed";
+    let (s, j) = call(&st, died(c["fence"].as_i64().unwrap(), oom)).await;
+    assert_eq!(s, StatusCode::OK, "{j}");
+    assert_eq!(j["status"], "failed", "{j}");
+    assert!(
+        j["message"]
+            .as_str()
+            .unwrap()
+            .contains("memory allocation of 20412450768 bytes failed"),
+        "{j}"
+    );
 }

@@ -101,7 +101,7 @@ async fn submit(st: &AppState, body: &Value) -> (StatusCode, Value) {
 async fn cap_pages(store: &Store, pages: u64) {
     let pool = store.pool();
     let mut held = Vec::new();
-    for _ in 0..8 {
+    for _ in 0..pool.options().get_max_connections() {
         held.push(pool.acquire().await.unwrap());
     }
     for c in &mut held {
@@ -213,6 +213,36 @@ async fn a_full_store_answers_507_keeps_what_it_acknowledged_and_recovers() {
         again.count_all().await.unwrap() as usize,
         kept.len() + usize::from(!deleted)
     );
+}
+
+/// The store maps no file into the process: the WAL index is in heap memory (EXCLUSIVE
+/// locking mode), so a data folder whose files become unwritable under the server
+/// (`chattr +i`, a failing file system) gives I/O errors (507), not SIGBUS at the next
+/// write to a mapped page. Before, `t.db-shm` was created and mapped by every connection.
+#[tokio::test]
+async fn the_store_maps_no_shared_memory_file() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path()).await;
+    for _ in 0..3 {
+        let (s, v) = submit(&st, &scene()).await;
+        assert_eq!(s, StatusCode::CREATED, "{v}");
+    }
+    let (s, _) = call(&st, get("/api/v1/jobs")).await;
+    assert_eq!(s, StatusCode::OK);
+    assert!(dir.path().join("t.db-wal").exists(), "not in WAL mode");
+    assert!(
+        !dir.path().join("t.db-shm").exists(),
+        "a -shm file was created"
+    );
+    #[cfg(target_os = "linux")]
+    {
+        let maps = std::fs::read_to_string("/proc/self/maps").unwrap();
+        let db = dir.path().display().to_string();
+        assert!(
+            !maps.lines().any(|l| l.contains(&db)),
+            "a data folder file is mapped:\n{maps}"
+        );
+    }
 }
 
 /// A connection that comes back to the pool inside a transaction (what a failed `COMMIT`

@@ -302,3 +302,65 @@ pub fn scene(name: &str, cx: u32, cy: u32, steps: u32, snapshots: u32) -> Value 
         "output": output
     })
 }
+
+/// The process ids whose parent is `pid` (from `/proc/*/stat`; empty where there is none).
+pub fn children_of(pid: u32) -> Vec<u32> {
+    let Ok(dir) = std::fs::read_dir("/proc") else {
+        return Vec::new();
+    };
+    dir.flatten()
+        .filter_map(|e| {
+            let child: u32 = e.file_name().to_str()?.parse().ok()?;
+            let stat = std::fs::read_to_string(e.path().join("stat")).ok()?;
+            // `pid (comm) state ppid …`; comm may hold spaces, so split after the last ')'.
+            let ppid: u32 = stat
+                .rsplit_once(')')?
+                .1
+                .split_whitespace()
+                .nth(1)?
+                .parse()
+                .ok()?;
+            (ppid == pid).then_some(child)
+        })
+        .collect()
+}
+
+/// A remote worker, `fracture worker --server URL` (a supervisor and its worker process),
+/// stopped with its worker process on drop.
+pub struct RemoteWorker {
+    child: Child,
+}
+
+impl RemoteWorker {
+    /// Start `fracture worker` against `server` with the worker token `token`; its stderr
+    /// goes to `log`.
+    pub fn start(server: &Server, token: &str, log: &Path, extra: &[&str]) -> RemoteWorker {
+        let log = std::fs::File::create(log).expect("worker log");
+        let child = Command::new(fracture_bin())
+            .args(["worker", "--server", &server.url, "--threads", "1"])
+            .args(extra)
+            .env("FRACTURE_WORKER_TOKEN", token)
+            .env("RUST_LOG", "info")
+            .stdout(Stdio::null())
+            .stderr(log)
+            .spawn()
+            .expect("start the worker");
+        RemoteWorker { child }
+    }
+
+    /// The supervisor's process id.
+    pub fn pid(&self) -> u32 {
+        self.child.id()
+    }
+}
+
+impl Drop for RemoteWorker {
+    fn drop(&mut self) {
+        let kids = children_of(self.child.id());
+        let _ = self.child.kill();
+        let _ = self.child.wait();
+        for k in kids {
+            let _ = Command::new("kill").arg("-9").arg(k.to_string()).status();
+        }
+    }
+}

@@ -250,8 +250,10 @@ fn submit_wait_gives_up_after_the_retry_time() {
         std::thread::sleep(Duration::from_millis(50));
     }
     std::thread::sleep(Duration::from_millis(300));
-    s.stop();
+    // The command's retry clock starts when the server stops answering, which is during
+    // `stop` (the event stream ends when the shutdown begins): time from before it.
     let t0 = Instant::now();
+    s.stop();
     let status = wait_bounded(
         &mut child,
         Duration::from_secs(60),

@@ -1,17 +1,19 @@
 //! The service under a hostile tester's conditions, with the real binary: a full disk (a
 //! small tmpfs), a second server on the same data folder, a public bind without a token,
-//! a worker killed under its job, bad flags, a closed stdout pipe.
+//! a worker killed under its job (local, and a remote worker's process under its
+//! supervisor), a full disk under a running job's uploads, data files made immutable
+//! mid-run (SIGBUS before), bad flags, a closed stdout pipe.
 //!
-//! The disk-full test mounts a tmpfs (root only); where mounting is not allowed it says so
-//! and passes without running (the store-level fault injection of
-//! `server/tests/safety.rs` still runs).
+//! The disk-full tests mount a tmpfs and the immutable-files test a loop-mounted ext4 image
+//! (root only); where mounting is not allowed they say so and pass without running (the
+//! store-level fault injection of `server/tests/safety.rs` still runs).
 
 use std::io::{Read, Write};
 use std::path::{Path, PathBuf};
 use std::process::{Command, Stdio};
 use std::time::{Duration, Instant};
 
-use fracture_e2e::{Server, fracture_bin, scene, tiny_scene};
+use fracture_e2e::{RemoteWorker, Server, children_of, fracture_bin, scene, tiny_scene};
 use serde_json::{Value, json};
 
 const LONG: Duration = Duration::from_secs(90);
@@ -48,6 +50,71 @@ impl Drop for Tmpfs {
     fn drop(&mut self) {
         let _ = Command::new("umount").arg("-l").arg(&self.dir).status();
     }
+}
+
+/// An ext4 file system in a loop-mounted image file (tmpfs pages are never written back,
+/// so they cannot show what a disk does), unmounted on drop. `Err` says why not (no root,
+/// no loop devices, no mkfs.ext4).
+struct Ext4 {
+    dir: PathBuf,
+    _parent: tempfile::TempDir,
+}
+
+impl Ext4 {
+    fn mount(size_mb: u64) -> Result<Ext4, String> {
+        let parent = tempfile::tempdir().map_err(|e| e.to_string())?;
+        let img = parent.path().join("fs.img");
+        let dir = parent.path().join("mnt");
+        std::fs::create_dir_all(&dir).map_err(|e| e.to_string())?;
+        std::fs::File::create(&img)
+            .and_then(|f| f.set_len(size_mb << 20))
+            .map_err(|e| e.to_string())?;
+        let run = |cmd: &mut Command| -> Result<(), String> {
+            let out = cmd.output().map_err(|e| format!("{cmd:?}: {e}"))?;
+            if out.status.success() {
+                Ok(())
+            } else {
+                Err(format!(
+                    "{cmd:?}: {}",
+                    String::from_utf8_lossy(&out.stderr).trim()
+                ))
+            }
+        };
+        run(Command::new("mkfs.ext4").args(["-q", "-F"]).arg(&img))?;
+        run(Command::new("mount")
+            .args(["-o", "loop"])
+            .arg(&img)
+            .arg(&dir))?;
+        Ok(Ext4 {
+            dir,
+            _parent: parent,
+        })
+    }
+}
+
+impl Drop for Ext4 {
+    fn drop(&mut self) {
+        let _ = Command::new("chattr")
+            .arg("-R")
+            .arg("-i")
+            .arg(&self.dir)
+            .status();
+        let quiet = Command::new("umount")
+            .arg(&self.dir)
+            .stderr(Stdio::null())
+            .status();
+        if !quiet.is_ok_and(|s| s.success()) {
+            let _ = Command::new("umount").arg("-l").arg(&self.dir).status();
+        }
+    }
+}
+
+/// Whether process `pid` is running (not gone, not a zombie).
+fn alive(pid: u32) -> bool {
+    std::fs::read_to_string(format!("/proc/{pid}/stat"))
+        .ok()
+        .and_then(|s| s.rsplit_once(')').map(|(_, r)| r.trim_start().to_string()))
+        .is_some_and(|r| !r.starts_with('Z'))
 }
 
 /// Fill the file system of `dir` with `dir/filler` until it is full.
@@ -321,6 +388,300 @@ fn a_dead_workers_exit_cause_is_in_the_jobs_message() {
     let m = j["message"].as_str().unwrap_or("");
     assert!(m.contains("signal 9") && m.contains("SIGKILL"), "{m}");
     assert!(!m.contains("lease expired"), "{m}");
+}
+
+/// The status events of job `id` (SSE), each with the time it arrived, until the job ends.
+fn status_events(s: &Server, id: &str) -> std::thread::JoinHandle<Vec<(Instant, Value)>> {
+    let url = s.at(&format!("/api/v1/jobs/{id}/events"));
+    std::thread::spawn(move || {
+        let http = reqwest::blocking::Client::builder()
+            .timeout(LONG)
+            .build()
+            .expect("client");
+        let mut out = Vec::new();
+        let Ok(r) = http.get(url).send() else {
+            return out;
+        };
+        let mut event = String::new();
+        for line in std::io::BufRead::lines(std::io::BufReader::new(r)) {
+            let Ok(line) = line else { break };
+            if let Some(e) = line.strip_prefix("event:") {
+                event = e.trim().to_string();
+            } else if let Some(d) = line.strip_prefix("data:")
+                && event == "status"
+            {
+                let v: Value = serde_json::from_str(d.trim()).unwrap_or(Value::Null);
+                let done = matches!(status(&v), "completed" | "failed" | "cancelled");
+                out.push((Instant::now(), v));
+                if done {
+                    break;
+                }
+            }
+        }
+        out
+    })
+}
+
+/// Energy rows strictly in time order and snapshots indexed 0, 1, …: no row of the killed
+/// attempt survives next to the re-run's.
+fn assert_no_duplicate_rows(s: &Server, id: &str) {
+    let e = s.get_json(&format!("/api/v1/jobs/{id}/energy"));
+    let times: Vec<f64> = e
+        .as_array()
+        .expect("energy")
+        .iter()
+        .map(|r| r["time"].as_f64().unwrap_or(f64::NAN))
+        .collect();
+    assert!(!times.is_empty());
+    for w in times.windows(2) {
+        assert!(w[1] > w[0], "energy rows repeat or go back: {w:?}");
+    }
+    let snaps = s.get_json(&format!("/api/v1/jobs/{id}/snapshots"));
+    for (k, sn) in snaps.as_array().expect("snapshots").iter().enumerate() {
+        assert_eq!(sn["index"].as_u64(), Some(k as u64), "{snaps}");
+    }
+}
+
+/// A remote `fracture worker` is a supervisor and a worker process: when the worker
+/// process is killed (SIGKILL) under its job, the supervisor reports the cause and the
+/// server releases the job at once (well before its 60 s lease) with "signal 9" in its
+/// message; the new worker process re-runs it to completion without duplicate rows.
+#[test]
+fn a_remote_workers_death_is_reported_by_its_supervisor_at_once() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let token = "remote-worker-token";
+    let s = Server::start(
+        dir.path(),
+        &[
+            "--workers",
+            "0",
+            "--worker-token",
+            token,
+            "--lease-seconds",
+            "60",
+        ],
+    );
+    let w = RemoteWorker::start(
+        &s,
+        token,
+        &dir.path().join("worker.log"),
+        &["--flush-ms", "100", "--give-up-seconds", "2"],
+    );
+    let id = s.submit(&scene("remote-killed", 30, 15, 8000, 5));
+    let events = status_events(&s, &id);
+    let j = s.wait_for(&id, LONG, |j| {
+        status(j) == "running" && j["progress"]["step"].as_u64().unwrap_or(0) > 0
+            || matches!(status(j), "completed" | "failed")
+    });
+    assert_eq!(status(&j), "running", "make the scene longer");
+    // The worker id is `host-PID-random`, PID the worker process (the supervisor's child).
+    let pid: u32 = j["worker"]
+        .as_str()
+        .and_then(|w| w.rsplit('-').nth(1))
+        .and_then(|p| p.parse().ok())
+        .expect("pid in the worker id");
+    assert_ne!(pid, w.pid(), "the job runs in the supervisor's child");
+    assert!(
+        children_of(w.pid()).contains(&pid),
+        "not the supervisor's child"
+    );
+    let t0 = Instant::now();
+    assert!(
+        Command::new("kill")
+            .args(["-9", &pid.to_string()])
+            .status()
+            .is_ok_and(|s| s.success())
+    );
+    let done = s.wait_done(&id, LONG);
+    let events = events.join().expect("events");
+    let released = events
+        .iter()
+        .find(|(_, e)| status(e) == "queued" && e["attempts"] == 1)
+        .unwrap_or_else(|| panic!("never released: {events:?}"));
+    let m = released.1["message"].as_str().unwrap_or("");
+    assert!(
+        released.0.duration_since(t0) < Duration::from_secs(15),
+        "released after {:?}, not at once",
+        released.0.duration_since(t0)
+    );
+    assert!(m.contains("signal 9") && m.contains("SIGKILL"), "{m}");
+    assert!(!m.contains("lease expired"), "{m}");
+    assert_eq!(status(&done), "completed", "{done}");
+    assert_eq!(done["attempts"], 2, "{done}");
+    assert_no_duplicate_rows(&s, &id);
+    drop(w);
+}
+
+/// A worker whose uploads fail because the server's disk is full does not burn attempts:
+/// a remote worker (its log outside the full tmpfs) runs a job on a server whose data
+/// folder is a small tmpfs; the tmpfs is filled while the job runs, the worker's uploads
+/// get 507 and are retried while it keeps the job (its attempts stay 1, it is not failed
+/// as "lost"), and once space is freed a few seconds later the job completes, once.
+#[test]
+fn uploads_on_a_full_disk_keep_the_job_and_complete_once_space_returns() {
+    let Some(fs) = Tmpfs::mount("16m") else {
+        eprintln!("skipped: cannot mount a tmpfs here (needs root)");
+        return;
+    };
+    let data = fs.dir.join("data");
+    std::fs::create_dir_all(&data).expect("data");
+    let logs = tempfile::tempdir().expect("tmp");
+    let token = "disk-full-worker-token";
+    let s = Server::start(
+        &data,
+        &[
+            "--workers",
+            "0",
+            "--worker-token",
+            token,
+            "--lease-seconds",
+            "30",
+        ],
+    );
+    let log = logs.path().join("worker.log");
+    let _w = RemoteWorker::start(&s, token, &log, &["--flush-ms", "50"]);
+    let id = s.submit(&scene("disk-full-run", 30, 15, 20000, 60));
+    let j = s.wait_for(&id, LONG, |j| {
+        status(j) == "running" && j["progress"]["step"].as_u64().unwrap_or(0) > 0
+            || matches!(status(j), "completed" | "failed")
+    });
+    assert_eq!(status(&j), "running", "make the scene longer");
+    let filler = fill(&fs.dir);
+    // Wait until the worker has been refused (507) at least once.
+    let t0 = Instant::now();
+    let said = || {
+        std::fs::read_to_string(&log)
+            .unwrap_or_default()
+            .contains("the server's disk is full; retrying")
+    };
+    while !said() {
+        let j = s.job(&id);
+        assert_eq!(status(&j), "running", "ended before a 507: {j}");
+        assert!(
+            t0.elapsed() < Duration::from_secs(60),
+            "the worker never met the full disk"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    }
+    // A few seconds on the full disk: the job stays running, its first attempt.
+    let full_since = Instant::now();
+    while full_since.elapsed() < Duration::from_secs(3) {
+        let j = s.job(&id);
+        assert_eq!(status(&j), "running", "{j}");
+        assert_eq!(j["attempts"], 1, "attempts climb on a full disk: {j}");
+        std::thread::sleep(Duration::from_millis(200));
+    }
+    drop(filler);
+    std::fs::remove_file(fs.dir.join("filler")).expect("free space");
+    let done = s.wait_done(&id, LONG);
+    assert_eq!(status(&done), "completed", "{done}");
+    assert_eq!(done["attempts"], 1, "{done}");
+    assert_no_duplicate_rows(&s, &id);
+    drop(s);
+}
+
+/// The data folder's files become unwritable mid-run (`chattr -R +i`, after `sync` has
+/// written the pages back, on a real ext4 file system): the server used to die of SIGBUS
+/// at its next write to SQLite's memory-mapped WAL index (`fracture.db-shm`). Now every
+/// request is answered within a second, writes with 507 (and reads too, once an I/O error
+/// has broken the store's connection: a new one cannot lock a read-only file), the server
+/// stays up, and once the files are writable again writes and reads come back without a
+/// restart, with every acknowledged job.
+#[test]
+fn files_made_immutable_mid_run_give_507_not_sigbus() {
+    let fs = match Ext4::mount(64) {
+        Ok(fs) => fs,
+        Err(why) => {
+            eprintln!("skipped: cannot mount an ext4 image here ({why})");
+            return;
+        }
+    };
+    let data = fs.dir.join("data");
+    std::fs::create_dir_all(&data).expect("data");
+    let s = Server::start(&data, &["--workers", "1", "--lease-seconds", "30"]);
+    let running = s.submit(&scene("immutable-run", 30, 15, 20000, 30));
+    s.wait_for(&running, LONG, |j| status(j) != "queued");
+    let before = s.submit(&tiny_scene("before", 10, 0));
+    assert!(Command::new("sync").status().is_ok_and(|s| s.success()));
+    let chattr = Command::new("chattr")
+        .arg("-R")
+        .arg("+i")
+        .arg(&data)
+        .status();
+    if !chattr.is_ok_and(|s| s.success()) {
+        eprintln!("skipped: chattr +i does not work here");
+        return;
+    }
+    let mut refused = 0;
+    for i in 0..20 {
+        let t0 = Instant::now();
+        let r = s
+            .http
+            .post(s.at("/api/v1/jobs"))
+            .json(&tiny_scene(&format!("while-immutable-{i}"), 10, 0))
+            .send();
+        assert!(
+            alive(s.pid()),
+            "the server died (SIGBUS?) at submission {i}: {r:?}"
+        );
+        let r = r.expect("an answer");
+        let st = r.status().as_u16();
+        let v: Value = r.json().unwrap_or(Value::Null);
+        assert!(
+            t0.elapsed() < Duration::from_secs(1),
+            "took {:?}",
+            t0.elapsed()
+        );
+        match st {
+            507 => {
+                assert_eq!(v["error"], "insufficient_storage", "{v}");
+                refused += 1;
+            }
+            201 => {}
+            other => panic!("submission {i}: {other}: {v}"),
+        }
+        let t0 = Instant::now();
+        let r = s
+            .http
+            .get(s.at(&format!("/api/v1/jobs/{before}")))
+            .send()
+            .expect("a read is answered");
+        assert!(
+            matches!(r.status().as_u16(), 200 | 507),
+            "read: {}",
+            r.status()
+        );
+        assert!(t0.elapsed() < Duration::from_secs(1));
+    }
+    assert!(
+        refused > 0,
+        "no write was refused: the files were not unwritable"
+    );
+    assert!(alive(s.pid()));
+    // Writable again: writes and reads come back without a restart.
+    let _ = Command::new("chattr")
+        .arg("-R")
+        .arg("-i")
+        .arg(&data)
+        .status();
+    let t0 = Instant::now();
+    let after = loop {
+        let (st, v) = submit_any(&s, &tiny_scene("after", 10, 0));
+        if st == 201 {
+            break v["id"].as_str().expect("id").to_string();
+        }
+        assert_eq!(st, 507, "{v}");
+        assert!(
+            t0.elapsed() < Duration::from_secs(10),
+            "writes did not come back"
+        );
+        std::thread::sleep(Duration::from_millis(100));
+    };
+    assert_eq!(status(&s.job(&before)), "queued");
+    assert_eq!(status(&s.job(&after)), "queued");
+    let (st, _) = s.post_json(&format!("/api/v1/jobs/{running}/cancel"), &json!({}));
+    assert_eq!(st, 200);
+    drop(s);
 }
 
 /// `--lease-seconds NaN` is a usage error (exit 2), not a panic.

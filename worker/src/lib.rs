@@ -9,12 +9,15 @@
 //! * [`LocalOutput`] is the sink of `fracture run`: the files of `run-output.md`.
 //! * [`remote`] is the remote worker: claims jobs from a server over HTTP, heartbeats,
 //!   obeys cancellation and streams the results ([`remote::run_worker`]).
+//! * [`supervise`] runs the remote worker loop in a child process and reports the child's
+//!   death (signal, exit status, last lines of stderr) for the job it held.
 //!
 //! The `fields.mcap` format itself lives in [`fracture_results::mcapfile`].
 
 pub mod local;
 pub mod remote;
 mod run;
+pub mod supervise;
 
 pub use local::{LocalOutput, LocalOutputError};
 pub use run::run_scene;

@@ -73,16 +73,19 @@ pub struct WorkerConfig {
     pub worker_id: String,
     /// Jobs whose memory estimate exceeds this fail before they are built (bytes).
     pub max_memory: Option<u64>,
+    /// Tell a supervising parent on stdout which claim this process holds
+    /// ([`crate::supervise`]): `HOLDS <job> <fence>` after a claim, `IDLE` when it ends.
+    pub announce_claims: bool,
 }
 
 /// How long uploads are retried while the server answers 507 (its disk is full).
 pub const STORAGE_BUDGET: Duration = Duration::from_secs(120);
 
 /// A small blocking client for the worker routes.
-struct Api {
-    http: Client,
-    base: String,
-    token: String,
+pub(crate) struct Api {
+    pub(crate) http: Client,
+    pub(crate) base: String,
+    pub(crate) token: String,
 }
 
 impl Api {
@@ -111,7 +114,7 @@ impl Api {
         })
     }
 
-    fn post_json<T: serde::Serialize>(
+    pub(crate) fn post_json<T: serde::Serialize>(
         &self,
         path: &str,
         body: &T,
@@ -138,7 +141,7 @@ impl Api {
 
     /// Retry transient failures for up to `budget`, and a server without storage (507)
     /// for up to [`STORAGE_BUDGET`] (its disk may be freed).
-    fn retry<T>(
+    pub(crate) fn retry<T>(
         &self,
         budget: Duration,
         mut f: impl FnMut() -> Result<T, ClientError>,
@@ -246,6 +249,9 @@ fn failed_summary(scene: Option<&Scene>, failure: FailureKind, message: String) 
 fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
     let job = claim.job_id.clone();
     let fence = claim.fence;
+    if cfg.announce_claims {
+        crate::supervise::announce(Some((&job, fence)));
+    }
     tracing::info!(job = %job, attempt = claim.attempt, "running");
     let cancel = Arc::new(AtomicBool::new(false));
     let lost = Arc::new(AtomicBool::new(false));
@@ -342,6 +348,9 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
     }
     let _ = stop_tx.send(());
     let _ = hb.join();
+    if cfg.announce_claims {
+        crate::supervise::announce(None);
+    }
     tracing::info!(job = %job, status = ?summary.status, "run ended");
 }
 
@@ -556,6 +565,30 @@ mod tests {
             }
         });
         format!("http://{addr}")
+    }
+
+    /// The memory cap is enforced: while it is set, an allocation beyond it fails (here
+    /// `try_reserve`, which reports what would abort a run: "memory allocation of N bytes
+    /// failed"), and the previous limit is back once it is dropped.
+    #[cfg(target_os = "linux")]
+    #[test]
+    fn the_memory_cap_makes_a_larger_allocation_fail_and_is_lifted() {
+        use rustix::process::{Resource, getrlimit};
+        let before = getrlimit(Resource::As);
+        let estimate = 64u64 << 20;
+        {
+            let _cap = MemoryCap::set(estimate, 1);
+            let cap = getrlimit(Resource::As).current.expect("a cap is set");
+            let now = current_address_space().unwrap();
+            // Current address space + 1.5 × estimate + 1 GiB + 128 MiB per thread.
+            assert!(cap >= now && cap - now <= estimate * 3 / 2 + (1 << 30) + (128 << 20));
+            let mut v: Vec<u8> = Vec::new();
+            assert!(
+                v.try_reserve_exact(cap as usize).is_err(),
+                "an allocation of the whole cap succeeded under it"
+            );
+        }
+        assert_eq!(getrlimit(Resource::As), before, "the cap was not lifted");
     }
 
     /// A server whose disk is full (507) is not a transient failure to burn retries and

@@ -1,5 +1,6 @@
 //! The worker protocol (`/api/v1/worker/…`, worker token): claim (long poll), heartbeat,
-//! history batches, snapshot upload, finish. Every write names the claim's fence; a stale
+//! history batches, snapshot upload, finish, and the death report of a remote worker's
+//! supervisor. Every write names the claim's fence; a stale
 //! one is 409 (`StoreError::Fenced`) and the worker drops the job.
 
 use std::time::Duration;
@@ -12,6 +13,7 @@ use fracture_api::Scene;
 use fracture_api::jobs::{ErrorBody, JobInfo, JobStatus, SnapshotInfo};
 use fracture_api::protocol::{
     Claim, ClaimRequest, CrackTipBatch, EnergyBatch, FinishRequest, Heartbeat, HeartbeatReply,
+    WorkerDied,
 };
 use fracture_results::codec;
 use serde::Deserialize;
@@ -245,5 +247,48 @@ pub(super) async fn worker_finish(
     tracing::info!(job = %id, status = row.status.as_str(), "finished");
     st.announce(&row);
     st.queue_changed.notify_waiters();
+    Ok(Json(row.info(false)?))
+}
+
+/// Longest exit cause kept in a job's message (characters).
+const MAX_CAUSE_CHARS: usize = 4000;
+
+/// A remote worker's supervisor reports that its worker process died while it held this
+/// claim: the job is released at once, by the rules of a local worker's death (re-queued;
+/// failed past the attempt limit, or at once when the cause shows it ran out of memory;
+/// cancelled if that was asked), with the cause in its message.
+#[utoipa::path(post, path = "/api/v1/worker/jobs/{id}/died", tag = "worker",
+    params(("id" = String, Path, description = "Job id")),
+    request_body(content = WorkerDied, content_type = "application/json"),
+    responses((status = 200, description = "The released job", body = JobInfo),
+        (status = 401, description = "Missing or wrong worker token", body = ErrorBody),
+        (status = 409, description = "Stale fencing token: the job was already released or finished", body = ErrorBody)),
+    security(("bearer" = [])))]
+pub(super) async fn worker_died(
+    State(st): State<AppState>,
+    _: WorkerToken,
+    Path(id): Path<String>,
+    ApiJson(d): ApiJson<WorkerDied>,
+) -> Result<Json<JobInfo>, ApiError> {
+    let cause: String = if d.cause.chars().count() > MAX_CAUSE_CHARS {
+        format!(
+            "{}…",
+            d.cause.chars().take(MAX_CAUSE_CHARS).collect::<String>()
+        )
+    } else {
+        d.cause
+    };
+    let cause = if cause.trim().is_empty() {
+        "its process ended (no cause given)".to_string()
+    } else {
+        cause
+    };
+    let rows = crate::service::release_dead(
+        &st,
+        crate::service::DeadWorker::Claim(&id, d.fence),
+        &format!("{} (reported by its supervisor)", cause.trim()),
+    )
+    .await?;
+    let row = rows.into_iter().next().ok_or(StoreError::Fenced)?;
     Ok(Json(row.info(false)?))
 }

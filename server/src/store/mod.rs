@@ -1,6 +1,8 @@
 //! The SQLite store: the server is its only writer.
 //!
-//! * [`Store`]: the pool, [`Store::open`] with the embedded numbered migrations
+//! * [`Store`]: the pool (one connection in SQLite's EXCLUSIVE locking mode, so the WAL index
+//!   lives in heap memory: no file is mapped into the process), [`Store::open`] with the
+//!   embedded numbered migrations
 //!   (`server/migrations/`, never edited after they land), [`StoreError`].
 //! * `jobs`: job rows ([`JobRow`]), creation, lists, cancellation, deletion.
 //! * `queue`: the durable queue: claim with one `UPDATE … RETURNING`, leases, heartbeats,
@@ -13,7 +15,8 @@
 //! error) SQLite may keep the transaction or roll it back behind sqlx's back, and a pooled
 //! connection left inside one would hold the write lock (every other writer: "database is
 //! locked") and swallow later autocommit writes that are never committed. Such a
-//! connection is closed instead. A write with `RETURNING` runs in an explicit
+//! connection is rolled back, and closed when that fails or when it can no longer begin a
+//! transaction (after an I/O error). A write with `RETURNING` runs in an explicit
 //! transaction: in autocommit mode SQLite commits such a statement when it is reset after
 //! its first row is read, and a commit that fails there (a full disk) never reaches the
 //! caller, who already has the row — the server answered 201 for jobs that were never
@@ -30,7 +33,8 @@ use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use serde::de::DeserializeOwned;
 use sqlx::sqlite::{
-    SqliteConnectOptions, SqliteJournalMode, SqlitePoolOptions, SqliteRow, SqliteSynchronous,
+    SqliteConnectOptions, SqliteJournalMode, SqliteLockingMode, SqlitePoolOptions, SqliteRow,
+    SqliteSynchronous,
 };
 use sqlx::{Connection, Row, Sqlite, SqlitePool};
 
@@ -80,25 +84,56 @@ pub struct Store {
 impl Store {
     /// Open (creating if needed) the database file and run the embedded migrations.
     pub async fn open(path: &Path) -> Result<Store, StoreError> {
+        // EXCLUSIVE locking before WAL: SQLite keeps the WAL index in heap memory instead of
+        // a shared-memory file (`fracture.db-shm`) mapped into the process. A mapped file
+        // turns a data folder whose files become unwritable under it (`chattr +i`, a file
+        // system that fails) into SIGBUS, a crash of the server, at the next write to a page
+        // the kernel had written back; with no mapping such writes are I/O errors (507).
+        // Safe because one server process owns the folder (its lock) and the pool has one
+        // connection, which holds the database's lock.
         let opts = SqliteConnectOptions::from_str("sqlite://")?
             .filename(path)
             .create_if_missing(true)
+            .locking_mode(SqliteLockingMode::Exclusive)
             .journal_mode(SqliteJournalMode::Wal)
             .synchronous(SqliteSynchronous::Normal)
             .busy_timeout(Duration::from_secs(15))
             .foreign_keys(true);
         let pool = SqlitePoolOptions::new()
-            .max_connections(8)
+            .max_connections(1)
             .acquire_timeout(Duration::from_secs(10))
             .after_release(|conn, _| {
                 Box::pin(async move {
                     // `ROLLBACK` succeeds only inside a transaction: none may be open here.
                     let was_open = sqlx::raw_sql("ROLLBACK").execute(&mut *conn).await.is_ok();
-                    if was_open || conn.is_in_transaction() {
+                    if conn.is_in_transaction() {
+                        tracing::warn!(
+                            "a store connection came back inside a transaction that does not \
+                             roll back; closed"
+                        );
+                        return Ok(false);
+                    }
+                    if was_open {
                         tracing::warn!(
                             "a store connection came back inside a transaction (after a failed \
-                             commit?); rolled back and closed"
+                             commit?); rolled back"
                         );
+                    }
+                    // A connection that can no longer read or begin a write is closed, so
+                    // the next request gets a fresh one. It is kept otherwise, also after an
+                    // I/O error: while the data files are unwritable a fresh connection
+                    // cannot take the file's lock at all (reads would fail too), the open
+                    // one still reads. No I/O here in EXCLUSIVE mode: the lock is held and
+                    // the WAL index is in memory.
+                    let healthy = sqlx::raw_sql(
+                        "BEGIN IMMEDIATE; SELECT count(*) FROM sqlite_master; ROLLBACK",
+                    )
+                    .execute(&mut *conn)
+                    .await
+                    .is_ok();
+                    if !healthy {
+                        let _ = sqlx::raw_sql("ROLLBACK").execute(&mut *conn).await;
+                        tracing::warn!("a store connection failed its health check; closed");
                         return Ok(false);
                     }
                     Ok(true)

@@ -8,6 +8,19 @@ use fracture_api::results::{Progress, RunStatus, Summary};
 
 use super::{JobRow, Store, StoreError, col, delete_job_rows, now_ms, to_json};
 
+/// The release of a dead worker's jobs (`?1` max attempts, `?2` deterministic, `?3` the
+/// cause); the caller adds the `WHERE` clause.
+const RELEASE: &str = "UPDATE jobs SET
+    status = CASE WHEN cancel_requested != 0 THEN 'cancelled'
+                  WHEN ?2 OR attempts >= ?1 THEN 'failed' ELSE 'queued' END,
+    message = CASE WHEN cancel_requested != 0 THEN 'cancelled (its worker died: ' || ?3 || ')'
+                  WHEN ?2 THEN 'the worker running it died: ' || ?3
+                  WHEN attempts >= ?1 THEN 'the worker running it died (attempt ' || attempts || ' of ' || ?1 || '; giving up): ' || ?3
+                  ELSE 're-queued: the worker running it died: ' || ?3 END,
+    finished_at = CASE WHEN cancel_requested != 0 OR ?2 OR attempts >= ?1
+                       THEN strftime('%Y-%m-%dT%H:%M:%fZ','now') ELSE NULL END,
+    worker_id = NULL, lease_until_ms = NULL";
+
 /// A successful claim.
 #[derive(Debug, Clone)]
 pub struct Claimed {
@@ -162,9 +175,10 @@ impl Store {
     }
 
     /// Release the running jobs of a worker that is known to be dead (a local worker process
-    /// that exited; its worker ids start with `worker_prefix`): each is cancelled if that was asked, failed past `max_attempts` claims
-    /// or when `deterministic` (it ran out of memory: it would again), and re-queued
-    /// otherwise; `cause` (how the process ended, its last output) goes into the message.
+    /// that exited; its worker ids start with `worker_prefix`): each is cancelled if that
+    /// was asked, failed past `max_attempts` claims or when `deterministic` (it ran out of
+    /// memory: it would again), and re-queued otherwise; `cause` (how the process ended,
+    /// its last output) goes into the message.
     pub async fn release_worker(
         &self,
         worker_prefix: &str,
@@ -173,28 +187,49 @@ impl Store {
         deterministic: bool,
     ) -> Result<Vec<JobRow>, StoreError> {
         let mut tx = self.pool.begin().await?;
-        let rows = sqlx::query(
-            "UPDATE jobs SET
-                status = CASE WHEN cancel_requested != 0 THEN 'cancelled'
-                              WHEN ?2 OR attempts >= ?1 THEN 'failed' ELSE 'queued' END,
-                message = CASE WHEN cancel_requested != 0 THEN 'cancelled (its worker died: ' || ?3 || ')'
-                              WHEN ?2 THEN 'the worker running it died: ' || ?3
-                              WHEN attempts >= ?1 THEN 'the worker running it died (attempt ' || attempts || ' of ' || ?1 || '; giving up): ' || ?3
-                              ELSE 're-queued: the worker running it died: ' || ?3 END,
-                finished_at = CASE WHEN cancel_requested != 0 OR ?2 OR attempts >= ?1
-                                   THEN strftime('%Y-%m-%dT%H:%M:%fZ','now') ELSE NULL END,
-                worker_id = NULL, lease_until_ms = NULL
-             WHERE status = 'running' AND substr(worker_id, 1, length(?4)) = ?4
-             RETURNING *",
-        )
-        .bind(max_attempts as i64)
-        .bind(deterministic)
-        .bind(cause)
-        .bind(worker_prefix)
-        .fetch_all(&mut *tx)
-        .await?;
+        // Constant text: only the WHERE clause differs between the two releases.
+        let sql = format!(
+            "{RELEASE} WHERE status = 'running' AND substr(worker_id, 1, length(?4)) = ?4 RETURNING *"
+        );
+        let rows = sqlx::query(sqlx::AssertSqlSafe(sql))
+            .bind(max_attempts as i64)
+            .bind(deterministic)
+            .bind(cause)
+            .bind(worker_prefix)
+            .fetch_all(&mut *tx)
+            .await?;
         tx.commit().await?;
         JobRow::decode_all(&rows)
+    }
+
+    /// Release one claim of a dead worker (reported by a remote worker's supervisor), with
+    /// the rules of [`Store::release_worker`]; fenced: [`StoreError::Fenced`] when the job
+    /// is no longer running under `fence`.
+    pub async fn release_claim(
+        &self,
+        id: &str,
+        fence: i64,
+        cause: &str,
+        max_attempts: u32,
+        deterministic: bool,
+    ) -> Result<JobRow, StoreError> {
+        let mut tx = self.pool.begin().await?;
+        // Constant text: only the WHERE clause differs between the two releases.
+        let sql =
+            format!("{RELEASE} WHERE status = 'running' AND id = ?4 AND fence = ?5 RETURNING *");
+        let row = sqlx::query(sqlx::AssertSqlSafe(sql))
+            .bind(max_attempts as i64)
+            .bind(deterministic)
+            .bind(cause)
+            .bind(id)
+            .bind(fence)
+            .fetch_optional(&mut *tx)
+            .await?;
+        tx.commit().await?;
+        row.as_ref()
+            .map(JobRow::decode)
+            .transpose()?
+            .ok_or(StoreError::Fenced)
     }
 
     /// Put every running job back in the queue without counting the attempt (shutdown of
