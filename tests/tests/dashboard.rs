@@ -19,6 +19,10 @@ use std::process::{Child, Command, Stdio};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
+use fantoccini::actions::{
+    InputSource, KeyAction, KeyActions, MOUSE_BUTTON_LEFT, MouseActions, PointerAction,
+    WheelAction, WheelActions,
+};
 use fantoccini::{Client, ClientBuilder, Locator};
 use serde_json::{Value, json};
 
@@ -353,6 +357,326 @@ async fn click(c: &Client, css: &str) {
         .click()
         .await
         .unwrap_or_else(|e| panic!("cannot click {css}: {e}"));
+}
+
+/// A plot's drawing area in viewport pixels (left, top, width, height), scrolled into view.
+async fn plot_area(c: &Client, id: &str) -> [f64; 4] {
+    let v = c
+        .execute(
+            "const f = document.getElementById(arguments[0]); f.scrollIntoView({block: 'center'}); \
+             const r = f.querySelector('.plot-area').getBoundingClientRect(); const d = f.dataset; \
+             return [r.left + Number(d.areaLeft), r.top + Number(d.areaTop), Number(d.areaWidth), Number(d.areaHeight)];",
+            vec![json!(id)],
+        )
+        .await
+        .expect("plot area");
+    let a: Vec<f64> = serde_json::from_value(v).expect("plot area numbers");
+    [a[0], a[1], a[2], a[3]]
+}
+
+/// The shown time range of a plot (its `data-x0`, `data-x1`).
+async fn plot_range(c: &Client, id: &str) -> (f64, f64) {
+    let v = c
+        .execute(
+            "const d = document.getElementById(arguments[0]).dataset; return [Number(d.x0), Number(d.x1)];",
+            vec![json!(id)],
+        )
+        .await
+        .expect("plot range");
+    let a: Vec<f64> = serde_json::from_value(v).expect("plot range numbers");
+    (a[0], a[1])
+}
+
+/// Real pointer input: move to each viewport point in turn, pressing the left button at
+/// the first and releasing it at the last when `drag`; with Shift held when `shift`.
+async fn pointer(c: &Client, points: &[(f64, f64)], drag: bool, shift: bool) {
+    let mv = |(x, y): (f64, f64)| PointerAction::MoveTo {
+        duration: Some(Duration::from_millis(60)),
+        x: x.round(),
+        y: y.round(),
+    };
+    let mut m = MouseActions::new("mouse".into());
+    let mut k = KeyActions::new("keys".into());
+    if shift {
+        k = k.then(KeyAction::Down { value: '\u{e008}' });
+        m = m.pause(Duration::from_millis(10));
+    }
+    for (i, p) in points.iter().enumerate() {
+        m = m.then(mv(*p));
+        k = k.pause(Duration::from_millis(0));
+        if drag && i == 0 {
+            m = m.then(PointerAction::Down {
+                button: MOUSE_BUTTON_LEFT,
+            });
+            k = k.pause(Duration::from_millis(0));
+        }
+    }
+    if drag {
+        m = m.then(PointerAction::Up {
+            button: MOUSE_BUTTON_LEFT,
+        });
+        k = k.pause(Duration::from_millis(0));
+    }
+    if shift {
+        m = m.pause(Duration::from_millis(10));
+        k = k.then(KeyAction::Up { value: '\u{e008}' });
+    }
+    let actions = fantoccini::actions::Actions::from(m).and(k);
+    c.perform_actions(actions).await.expect("pointer actions");
+    c.release_actions().await.expect("release actions");
+}
+
+/// A real double click at a viewport point.
+async fn double_click(c: &Client, (x, y): (f64, f64)) {
+    let mut m = MouseActions::new("mouse".into()).then(PointerAction::MoveTo {
+        duration: None,
+        x: x.round(),
+        y: y.round(),
+    });
+    for _ in 0..2 {
+        m = m
+            .then(PointerAction::Down {
+                button: MOUSE_BUTTON_LEFT,
+            })
+            .then(PointerAction::Up {
+                button: MOUSE_BUTTON_LEFT,
+            });
+    }
+    c.perform_actions(m).await.expect("double click");
+}
+
+/// A real wheel turn at a viewport point.
+async fn wheel(c: &Client, (x, y): (f64, f64), delta_y: i64) {
+    let w = WheelActions::new("wheel".into()).then(WheelAction::Scroll {
+        duration: None,
+        x: x.round() as i64,
+        y: y.round() as i64,
+        delta_x: 0,
+        delta_y,
+    });
+    c.perform_actions(w).await.expect("wheel");
+}
+
+async fn element_screenshot(c: &Client, css: &str, name: &str) {
+    let dir = Path::new(env!("CARGO_MANIFEST_DIR")).join("screenshots");
+    std::fs::create_dir_all(&dir).expect("create tests/screenshots");
+    let png = c
+        .find(Locator::Css(css))
+        .await
+        .unwrap_or_else(|e| panic!("no element {css}: {e}"))
+        .screenshot()
+        .await
+        .expect("element screenshot");
+    std::fs::write(dir.join(name), png).expect("write screenshot");
+}
+
+/// The run page's crack-tip position plot under real input: the hover readout's values are
+/// the API's rows (raw and as shown, with their unit), a drag zooms on the dragged range,
+/// the wheel zooms around the cursor, Shift-drag pans, a double click resets, and a legend
+/// entry hides and shows its series. Screenshots `plot-hover.png`, `plot-zoomed.png`.
+async fn plot_interaction(c: &Client) {
+    let long = Duration::from_secs(20);
+    let close = |a: f64, b: f64, tol: f64| (a - b).abs() <= tol * a.abs().max(b.abs()).max(1e-300);
+    let id = "plot-position";
+    let sel = format!("#{id}");
+    let [left, top, w, h] = plot_area(c, id).await;
+    let (f0, f1) = plot_range(c, id).await;
+    assert!(
+        f1 > f0 && w > 100.0 && h > 50.0,
+        "plot area {w}×{h}, range {f0}..{f1}"
+    );
+
+    // hover: the readout lists each series' nearest sample; check it against the API
+    pointer(
+        c,
+        &[
+            (left + 0.4 * w, top + 0.3 * h),
+            (left + 0.6 * w, top + 0.5 * h),
+        ],
+        false,
+        false,
+    )
+    .await;
+    wait_js(c, "the hover readout", &format!("const t = document.querySelector('{sel} .plot-tip'); return !t.hidden && t.querySelectorAll('.tip-row').length >= 3;"), long).await;
+    element_screenshot(c, &sel, "plot-hover.png").await;
+    let check = c
+        .execute_async(
+            "const [sel, done] = [arguments[0], arguments[arguments.length - 1]]; \
+             const id = decodeURIComponent(location.hash.split('/')[2] || ''); \
+             const tip = document.querySelector(sel + ' .plot-tip'); \
+             const [, cx, cu] = tip.querySelector('.tip-x').textContent.match(/= ([-0-9.e]+) (s|ms|µs|ns)$/); \
+             const cursorUs = Number(cx) * { s: 1e6, ms: 1e3, 'µs': 1, ns: 1e-3 }[cu]; \
+             const rows = [...tip.querySelectorAll('.tip-row')].map(r => ({ key: r.dataset.key, t: Number(r.dataset.t), y: Number(r.dataset.y), shown: r.querySelector('b').textContent })); \
+             fetch('/api/v1/jobs/' + id + '/crack-tips').then(r => r.json()).then(api => { \
+               const prefix = { '': 1, m: 1e-3, 'µ': 1e-6, k: 1e3 }; const out = []; \
+               for (const r of rows) { \
+                 const [, crack, tipNo, f] = r.key.match(/^(\\d+)\\/(\\d+)([xyl])$/); \
+                 const field = { x: 'x', y: 'y', l: 'length' }[f]; \
+                 const mine = api.filter(a => a.crack == crack && a.tip == tipNo); \
+                 const row = mine.find(a => a.time === r.t); \
+                 if (!row) { out.push(r.key + ': no API row at t=' + r.t); continue; } \
+                 if (row[field] !== r.y) out.push(r.key + ': readout ' + r.y + ' API ' + row[field]); \
+                 const best = Math.min(...mine.map(a => Math.abs(a.time * 1e6 - cursorUs))); \
+                 if (Math.abs(r.t * 1e6 - cursorUs) > best + 1e-3 * Math.abs(cursorUs) + 1e-9) out.push(r.key + ': not the nearest sample'); \
+                 const m = r.shown.match(/^([-0-9.e]+) (.?)m$/); \
+                 if (!m) { out.push(r.key + ': shown ' + r.shown); continue; } \
+                 const v = Number(m[1]) * prefix[m[2]]; \
+                 if (Math.abs(v - row[field]) > 1e-3 * Math.abs(row[field]) + 1e-12) out.push(r.key + ': shown ' + r.shown + ' API ' + row[field]); \
+               } \
+               done(JSON.stringify({ n: rows.length, errors: out })); \
+             }).catch(e => done('ERR ' + e));",
+            vec![json!(sel)],
+        )
+        .await
+        .expect("check the readout against the API");
+    let check: Value = serde_json::from_str(check.as_str().unwrap_or("{}")).unwrap_or(Value::Null);
+    assert!(
+        check["n"].as_u64().unwrap_or(0) >= 3 && check["errors"] == json!([]),
+        "hover readout against the API: {check}"
+    );
+
+    // drag from 30 % to 60 % of the width: the shown range is what was under the drag
+    pointer(
+        c,
+        &[
+            (left + 0.3 * w, top + 0.5 * h),
+            (left + 0.45 * w, top + 0.5 * h),
+            (left + 0.6 * w, top + 0.5 * h),
+        ],
+        true,
+        false,
+    )
+    .await;
+    wait_js(
+        c,
+        "zoomed by the drag",
+        &format!("return document.getElementById('{id}').dataset.zoomed === 'true';"),
+        long,
+    )
+    .await;
+    let (z0, z1) = plot_range(c, id).await;
+    let px = 2.0 / w; // the pointer lands on whole pixels
+    assert!(
+        (z0 - (f0 + 0.3 * (f1 - f0))).abs() <= px * (f1 - f0)
+            && (z1 - (f0 + 0.6 * (f1 - f0))).abs() <= px * (f1 - f0),
+        "drag 30–60 % of {f0}..{f1} zoomed to {z0}..{z1}"
+    );
+    // the wheel zooms around the cursor once the plot is focused (a click focuses it)
+    let at = (left + 0.5 * w, top + 0.5 * h);
+    pointer(c, &[at], false, false).await;
+    c.execute(
+        &format!("document.querySelector('{sel} .plot-area').focus();"),
+        vec![],
+    )
+    .await
+    .expect("focus the plot");
+    wheel(c, at, -150).await;
+    wait_js(c, "zoomed in by the wheel", &format!("const d = document.getElementById('{id}').dataset; return Number(d.x1) - Number(d.x0) < {} && true;", 0.9 * (z1 - z0)), long).await;
+    let (w0, w1) = plot_range(c, id).await;
+    let centre = z0 + 0.5 * (z1 - z0);
+    assert!(
+        close((centre - w0) / (w1 - w0), 0.5, 0.02)
+            && close(w1 - w0, (z1 - z0) * (-0.5f64).exp(), 0.02),
+        "wheel zoom around {centre}: {z0}..{z1} → {w0}..{w1}"
+    );
+    element_screenshot(c, &sel, "plot-zoomed.png").await;
+    // Shift-drag 20 % of the width to the left: later times, the same span
+    pointer(
+        c,
+        &[
+            (left + 0.6 * w, top + 0.5 * h),
+            (left + 0.5 * w, top + 0.5 * h),
+            (left + 0.4 * w, top + 0.5 * h),
+        ],
+        true,
+        true,
+    )
+    .await;
+    wait_js(
+        c,
+        "panned",
+        &format!("return Number(document.getElementById('{id}').dataset.x0) > {w0};"),
+        long,
+    )
+    .await;
+    let (p0, p1) = plot_range(c, id).await;
+    assert!(
+        close(p1 - p0, w1 - w0, 1e-9) && close(p0 - w0, 0.2 * (w1 - w0), 0.05),
+        "pan by 20 %: {w0}..{w1} → {p0}..{p1}"
+    );
+    // a double click resets to the full range
+    double_click(c, at).await;
+    wait_js(c, "zoom reset", &format!("const f = document.getElementById('{id}'); return f.dataset.zoomed === 'false' && f.querySelector('.plot-reset').hidden;"), long).await;
+    let (r0, r1) = plot_range(c, id).await;
+    assert!(
+        close(r0, f0, 1e-12) && close(r1, f1, 1e-12),
+        "reset to {r0}..{r1}, full {f0}..{f1}"
+    );
+
+    // a legend entry hides its series (path, readout row) and shows it again
+    let before = c
+        .execute(
+            &format!("return document.querySelectorAll('{sel} .series path').length;"),
+            vec![],
+        )
+        .await
+        .expect("count paths");
+    click(c, &format!("{sel} .legend-item")).await;
+    wait_js(c, "a series hidden from the legend", &format!("return document.querySelectorAll('{sel} .series path').length < {before} && document.querySelector('{sel} .legend-item').getAttribute('aria-pressed') === 'false';"), long).await;
+    let [left, top, w, h] = plot_area(c, id).await;
+    pointer(
+        c,
+        &[
+            (left + 0.55 * w, top + 0.5 * h),
+            (left + 0.6 * w, top + 0.5 * h),
+        ],
+        false,
+        false,
+    )
+    .await;
+    wait_js(c, "the readout without the hidden series", &format!("const f = document.getElementById('{id}'); const k = f.querySelector('.legend-item').dataset.key; const rows = [...f.querySelectorAll('.tip-row')]; return !f.querySelector('.plot-tip').hidden && rows.length > 0 && !rows.some(r => r.dataset.key === k);"), long).await;
+    click(c, &format!("{sel} .legend-item")).await;
+    wait_js(c, "the series shown again", &format!("return document.querySelectorAll('{sel} .series path').length === {before} && document.querySelector('{sel} .legend-item').getAttribute('aria-pressed') === 'true';"), long).await;
+    // live-run cost: plots of 20 000 and 200 000 samples (filtered) under 50 frames of 10
+    // new samples each: the median and worst redraw, and at most 4 points per pixel column
+    let perf = c
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             import('/js/plot.js').then(({ Plot }) => { \
+               const out = {}; \
+               for (const n of [20000, 200000]) { \
+                 const host = document.createElement('div'); host.style.width = '600px'; document.body.append(host); \
+                 const p = new Plot(host, { title: 'perf', yLabel: 'speed', yUnit: 'm/s', filter: 2 }); \
+                 for (let i = 0; i < n; i++) p.push('a', i * 1e-9, 1000 * Math.sin(i / 100)); \
+                 p.render(); \
+                 const ms = []; \
+                 for (let f = 0; f < 50; f++) { \
+                   for (let k = 0; k < 10; k++) p.push('a', (n + 10 * f + k) * 1e-9, 0); \
+                   const t = performance.now(); p.render(); ms.push(performance.now() - t); } \
+                 ms.sort((a, b) => a - b); \
+                 const points = (host.querySelector('.series path').getAttribute('d').match(/[ML]/g) || []).length; \
+                 out[n] = { median: ms[25], worst: ms[49], points, width: Number(host.querySelector('figure').dataset.areaWidth) }; \
+                 p.destroy(); host.remove(); } \
+               done(JSON.stringify(out)); \
+             }).catch(e => done('ERR ' + e));",
+            vec![],
+        )
+        .await
+        .expect("time the plot");
+    eprintln!("plot redraw times (ms) while samples arrive: {perf}");
+    let perf: Value = serde_json::from_str(perf.as_str().unwrap_or("{}")).unwrap_or(Value::Null);
+    for n in ["20000", "200000"] {
+        let p = &perf[n];
+        let v = |k: &str| p[k].as_f64().unwrap_or(f64::INFINITY);
+        assert!(
+            v("median") < 100.0 && v("points") <= 4.0 * v("width") + 8.0,
+            "plot of {n} samples: {p}"
+        );
+    }
+    // the speed plot's readout has its unit
+    let [sl, st, sw, sh] = plot_area(c, "plot-speed").await;
+    pointer(c, &[(sl + 0.6 * sw, st + 0.5 * sh)], false, false).await;
+    wait_js(c, "the speed readout", "const t = document.querySelector('#plot-speed .plot-tip'); return !t.hidden && t.textContent.includes('m/s');", long).await;
 }
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
@@ -702,41 +1026,9 @@ async fn run_steps(c: &Client, base: &str) {
     c.execute("const s = document.getElementById('snap-ppc'); s.value = ''; s.dispatchEvent(new Event('change'));", vec![])
         .await
         .expect("back to the automatic resolution");
-    // hover shows values
-    c.execute(
-        "const a = document.querySelector('#plot-speed .plot-area'); const r = a.getBoundingClientRect(); \
-         a.dispatchEvent(new PointerEvent('pointermove', {clientX: r.left + r.width * 0.6, clientY: r.top + 50, bubbles: true, pointerType: 'mouse'}));",
-        vec![],
-    )
-    .await
-    .expect("hover the speed plot");
-    wait_js(c, "the hover readout", "const t = document.querySelector('#plot-speed .plot-tip'); return !t.hidden && t.textContent.includes('m/s');", long).await;
-    // drag to zoom on time, double-click to reset
-    c.execute(
-        "const a = document.querySelector('#plot-energy .plot-area'); const r = a.getBoundingClientRect(); \
-         const ev = (type, f) => a.dispatchEvent(new PointerEvent(type, {clientX: r.left + r.width * f, clientY: r.top + 60, bubbles: true, pointerType: 'mouse', button: 0, pointerId: 1})); \
-         ev('pointerdown', 0.3); ev('pointermove', 0.45); ev('pointermove', 0.6); ev('pointerup', 0.6);",
-        vec![],
-    )
-    .await
-    .expect("drag on the energy plot");
-    wait_js(
-        c,
-        "zoomed (Reset zoom shown)",
-        "return !document.querySelector('#plot-energy .plot-head button').hidden;",
-        long,
-    )
-    .await;
-    c.execute("document.querySelector('#plot-energy .plot-area').dispatchEvent(new MouseEvent('dblclick', {bubbles: true}));", vec![])
-        .await
-        .expect("double-click");
-    wait_js(
-        c,
-        "zoom reset",
-        "return document.querySelector('#plot-energy .plot-head button').hidden;",
-        long,
-    )
-    .await;
+    // the plots under real mouse and wheel input (WebDriver actions): hover values checked
+    // against the API's rows, drag-zoom, wheel zoom, pan, reset, legend toggling
+    plot_interaction(c).await;
     // the keyboard reads values too
     let area = c
         .find(Locator::Css("#plot-j .plot-area"))
@@ -754,6 +1046,7 @@ async fn run_steps(c: &Client, base: &str) {
     .await
     .expect("scroll to the top");
     screenshot(c, "run.png", 1280, 3000).await;
+    screenshot(c, "run-phone.png", 390, 2400).await;
     c.set_window_size(1280, 900).await.expect("resize window");
 
     // 3b. Clone opens the scene editor with this run's scene; Rerun makes a linked run
@@ -829,7 +1122,7 @@ async fn run_steps(c: &Client, base: &str) {
         long,
     )
     .await;
-    wait_js(c, "two runs in the speed overlay", "return document.querySelectorAll('#cmp-speed .legend-item').length >= 2 && document.querySelectorAll('#cmp-speed .series path').length >= 2;", long).await;
+    wait_js(c, "two runs in the speed overlay", "return document.querySelectorAll('#cmp-speed .legend-item').length >= 2 && document.querySelectorAll('#cmp-speed .series path').length >= 2 && document.querySelectorAll('#cmp-length .series path').length >= 2 && document.querySelector('#cmp-speed .plot-filter').selectedOptions[0].textContent.startsWith('mean over');", long).await;
     let legend = c
         .execute("return [...document.querySelectorAll('#cmp-speed .legend-item')].map(b => b.textContent).join('|');", vec![])
         .await
@@ -966,7 +1259,7 @@ async fn run_steps(c: &Client, base: &str) {
     wait_js(
         c,
         "two speed curves on the sweep page",
-        "return document.querySelectorAll('#sweep-speed .series path').length >= 2 && document.querySelectorAll('#sweep-speed .legend-item').length >= 2;",
+        "return document.querySelectorAll('#sweep-speed .series path').length >= 2 && document.querySelectorAll('#sweep-speed .legend-item').length >= 2 && document.querySelectorAll('#sweep-length .series path').length >= 2;",
         long,
     )
     .await;

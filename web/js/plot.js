@@ -1,14 +1,21 @@
-// A small interactive SVG line plot, written for this dashboard (no third-party code).
+// The dashboard's one plotting module: an interactive SVG line plot of our own (no
+// third-party code; docs/dashboard.md says why). Every plot of every page is a `Plot`.
 //
-// - series toggled from the legend (real buttons, aria-pressed)
-// - hover (mouse, touch or keyboard arrows) shows every visible series' value at that time
-// - drag across the plot to zoom on time; double-click, Escape or "Reset zoom" to reset;
-//   + / − zoom around the cursor from the keyboard
+// - series toggled from the legend (real buttons, aria-pressed); Shift-click shows only one
+// - hover (mouse, touch or keyboard arrows): a crosshair and every visible series' value at
+//   that time, with units
+// - drag across the plot to zoom on time; the wheel zooms around the cursor once the plot
+//   is focused (click it) or with Ctrl; Shift-drag, Shift-wheel, a horizontal wheel or
+//   PageUp / PageDown pan; double-click, Escape or "Reset zoom" reset; + / − zoom from the
+//   keyboard
 // - labelled horizontal reference lines (wave speeds)
-// - live: `push`/`setData` then the plot redraws on the next animation frame
+// - live: `push`/`setData` then the plot redraws once on the next animation frame
 // - many points are reduced to first/min/max/last per pixel column before drawing
+//
+// The pure parts (ticks, zoom and pan transforms, nearest sample, thinning, legend state,
+// hover rows) are exported and tested in web/test/plot.test.mjs.
 
-import { h, num, siPrefix } from './util.js';
+import { h, num, replace, si, siPrefix } from './util.js';
 
 /** Colour-blind-safe palette (Okabe & Ito) plus a few extra hues. */
 export const PALETTE = ['#0072B2', '#D55E00', '#009E73', '#CC79A7', '#E69F00', '#56B4E9', '#7F3C8D', '#4D4D4D', '#A6761D', '#1B9E77'];
@@ -21,7 +28,6 @@ function esc(s) {
   return String(s).replace(/[&<>"]/g, (c) => ({ '&': '&amp;', '<': '&lt;', '>': '&gt;', '"': '&quot;' }[c]));
 }
 
-/** About `n` "nice" ticks (1, 2, 5 × 10^k) covering [lo, hi]. */
 /** Vertical distance (px) two reference-line labels in one column keep (11 px text with its halo). */
 export const LABEL_GAP_PX = 14;
 /** Width of one label character (px), an estimate for the 11 px font. */
@@ -47,6 +53,7 @@ export function placeLabels(labels, columns, gap) {
   });
 }
 
+/** About `n` "nice" ticks (1, 2, 2.5, 5 × 10^k) covering [lo, hi]. */
 export function niceTicks(lo, hi, n = 5) {
   if (!(hi > lo)) return [lo];
   const raw = (hi - lo) / Math.max(1, n);
@@ -60,8 +67,8 @@ export function niceTicks(lo, hi, n = 5) {
   return out;
 }
 
-/** Index of the sample of sorted `xs` nearest to x. */
-function nearest(xs, x) {
+/** Index of the sample of sorted `xs` nearest to x (-1 when empty; ties go left). */
+export function nearestIndex(xs, x) {
   let lo = 0, hi = xs.length - 1;
   if (hi < 0) return -1;
   while (hi - lo > 1) {
@@ -71,14 +78,149 @@ function nearest(xs, x) {
   return Math.abs(xs[lo] - x) <= Math.abs(xs[hi] - x) ? lo : hi;
 }
 
-/** First index with xs[i] >= x. */
-function lowerBound(xs, x) {
+/** First index with xs[i] >= x (xs ascending). */
+export function lowerBound(xs, x) {
   let lo = 0, hi = xs.length;
   while (lo < hi) {
     const mid = (lo + hi) >> 1;
     if (xs[mid] < x) lo = mid + 1; else hi = mid;
   }
   return lo;
+}
+
+/** Smallest shown span, as a fraction of the full range (deeper zooms stop there). */
+export const MIN_SPAN = 1e-6;
+
+/**
+ * Zoom the shown range `[x0, x1]` by `factor` around `center` (factor < 1 zooms in). With
+ * the full range `full` ([lo, hi] or null): a result that covers it is `null` (unzoomed),
+ * one that sticks out is shifted back inside, and no span gets below MIN_SPAN of it.
+ */
+export function zoomAround([x0, x1], center, factor, full = null) {
+  if (!(factor > 0) || !(x1 > x0)) return [x0, x1];
+  const c = Math.min(Math.max(center, x0), x1);
+  let a = c - (c - x0) * factor, b = c + (x1 - c) * factor;
+  if (!full) return [a, b];
+  const fs = full[1] - full[0];
+  if (b - a >= fs) return null;
+  const min = fs * MIN_SPAN;
+  if (b - a < min) { const f = (c - a) / (b - a); a = c - f * min; b = a + min; }
+  return clampInside([a, b], full);
+}
+
+/** Shift `[x0, x1]` by `dx`, kept inside `full` when given (the span does not change). */
+export function panBy([x0, x1], dx, full = null) {
+  const r = [x0 + dx, x1 + dx];
+  return full ? clampInside(r, full) : r;
+}
+
+function clampInside([a, b], [lo, hi]) {
+  if (b - a >= hi - lo) return [lo, hi];
+  if (a < lo) return [lo, lo + (b - a)];
+  if (b > hi) return [hi - (b - a), hi];
+  return [a, b];
+}
+
+/**
+ * The data range selected by a drag from pixel `p0` to `p1` on an axis whose plot area
+ * runs from pixel `left` over `width` pixels showing `[x0, x1]`; the drag is clipped to the
+ * area; `null` when it spans `minPx` pixels or fewer (a click, not a zoom).
+ */
+export function dragRange(p0, p1, { left, width, x0, x1 }, minPx = 5) {
+  const a = Math.max(left, Math.min(p0, p1)), b = Math.min(left + width, Math.max(p0, p1));
+  if (!(b - a > minPx)) return null;
+  const ix = (p) => x0 + ((p - left) / width) * (x1 - x0);
+  return [ix(a), ix(b)];
+}
+
+/**
+ * Indices of the samples `a … b-1` to draw when `col(x)` gives the pixel column of x: all
+ * of them when there are at most two per column, else per column the first, lowest,
+ * highest and last (so spikes stay visible); a non-finite y (a gap) is always kept.
+ */
+export function thinIndices(xs, ys, a, b, col, columns) {
+  const out = [];
+  if (b - a <= 2 * columns) { for (let i = a; i < b; i++) out.push(i); return out; }
+  let c = null, first, last, mnI, mxI;
+  const flush = () => {
+    if (c === null) return;
+    for (const i of [...new Set([first, mnI, mxI, last])].sort((p, q) => p - q)) out.push(i);
+    c = null;
+  };
+  for (let i = a; i < b; i++) {
+    const y = ys[i];
+    if (!Number.isFinite(y)) { flush(); out.push(i); continue; }
+    const k = Math.floor(col(xs[i]));
+    if (k !== c) { flush(); c = k; first = last = mnI = mxI = i; continue; }
+    last = i;
+    if (y < ys[mnI]) mnI = i;
+    if (y > ys[mxI]) mxI = i;
+  }
+  flush();
+  return out;
+}
+
+/**
+ * Legend state after a click on `key`: `visible` maps keys to booleans (not changed). A
+ * plain click flips that series; `solo` (Shift-click) shows only it, or all again when it
+ * already was the only one shown.
+ */
+export function legendToggle(visible, key, solo = false) {
+  const next = { ...visible };
+  if (!solo) { next[key] = !visible[key]; return next; }
+  const only = Object.keys(visible).every((k) => (k === key) === Boolean(visible[k]));
+  for (const k of Object.keys(next)) next[k] = only || k === key;
+  return next;
+}
+
+/**
+ * Centred moving mean over a time window `w`: each finite sample becomes the mean of the
+ * finite samples within ±w/2 of its time (xs ascending); non-finite samples stay gaps.
+ * Only the outputs from index `from` on are computed, into `out` (so a live series
+ * recomputes just its tail). `w <= 0` returns `ys` itself. Linear in the samples computed.
+ */
+export function movingMean(xs, ys, w, from = 0, out = new Array(xs.length)) {
+  if (!(w > 0)) return ys;
+  out.length = xs.length;
+  let a = from < xs.length ? lowerBound(xs, xs[from] - w / 2) : 0, b = a, sum = 0, n = 0;
+  for (let i = from; i < xs.length; i++) {
+    while (b < xs.length && xs[b] <= xs[i] + w / 2) { if (Number.isFinite(ys[b])) { sum += ys[b]; n++; } b++; }
+    while (xs[a] < xs[i] - w / 2) { if (Number.isFinite(ys[a])) { sum -= ys[a]; n--; } a++; }
+    out[i] = Number.isFinite(ys[i]) && n > 0 ? sum / n : NaN;
+  }
+  return out;
+}
+
+/** A value rounded to 1, 2 or 5 × 10^k. */
+function nice125(v) {
+  const mag = 10 ** Math.floor(Math.log10(v));
+  const m = v / mag;
+  return (m < 1.5 ? 1 : m < 3.5 ? 2 : m < 7.5 ? 5 : 10) * mag;
+}
+
+/** The filter windows offered for a time span: none, then about 1/200, 1/80, 1/40, 1/20 of it. */
+export function filterWindows(span) {
+  if (!(span > 0) || !Number.isFinite(span)) return [0];
+  return [0, ...new Set([200, 80, 40, 20].map((d) => nice125(span / d)))];
+}
+
+/**
+ * The hover rows at data x: for each visible series with samples, its sample nearest to x
+ * ({key, name, color, t, y}).
+ */
+export function hoverRows(series, x) {
+  const rows = [];
+  for (const s of series) {
+    if (!s.visible || !s.xs.length) continue;
+    const i = nearestIndex(s.xs, x);
+    rows.push({ key: s.key, name: s.name, color: s.color, dash: s.dash, t: s.xs[i], y: s.ys[i] });
+  }
+  return rows;
+}
+
+/** A short line in a series' colour and dash, for the legend and the readout. */
+function swatchSvg(color, dash) {
+  return `<svg width="22" height="10"><line x1="1" x2="21" y1="5" y2="5" stroke="${esc(color)}" stroke-width="2.5"${dash ? ` stroke-dasharray="${esc(dash)}"` : ''}/></svg>`;
 }
 
 export class Plot {
@@ -93,20 +235,32 @@ export class Plot {
     this.o = { height: 260, xLabel: 'time', xUnit: { factor: 1, unit: 's' }, yUnit: '', yPrefix: true, yZero: false, empty: 'No data yet', ...o };
     this.series = [];
     this.refLines = o.refLines || [];
+    // optional moving-mean filter (o.filter: index of the default window in filterWindows)
+    this.window = 0;
+    this.filterSelect = null;
+    if (o.filter !== undefined) {
+      this.filterSelect = h('select', { class: 'plot-filter', 'aria-label': `${o.title || 'plot'}: moving-mean filter`, title: 'Show a moving mean over a time window (the readout then shows the filtered values)', onchange: () => { this.window = Number(this.filterSelect.value) || 0; this.filterIndex = this.filterSelect.selectedIndex; this.update(); } });
+      this.filterIndex = o.filter;
+    }
     this.zoom = null;
     this.cursorX = null; // hovered data x, or null
+    this.cursorPy = null; // pointer's y in px over the plot, or null
     this.frame = 0;
     this.id = `plot${++plotCounter}`;
-    this.reset = h('button', { type: 'button', class: 'small', hidden: true, onclick: () => this.resetZoom() }, 'Reset zoom');
+    this.reset = h('button', { type: 'button', class: 'small plot-reset', hidden: true, onclick: () => this.resetZoom() }, 'Reset zoom');
     this.svgHost = h('div', {
       class: 'plot-area', tabindex: 0, role: 'group', 'aria-roledescription': 'interactive plot',
-      'aria-label': `${o.title || 'plot'}: drag or use + and − to zoom on time, double-click or Escape to reset, arrow keys to read values`,
+      'aria-label': `${o.title || 'plot'}: drag, the wheel or + and − zoom on time, Shift-drag or Page Up and Page Down pan, double-click or Escape reset, arrow keys read values`,
     });
+    // a fixed-size, contained box: redrawing a plot does not lay out the rest of the page
+    this.svgHost.style.height = `${this.o.height}px`;
     this.tip = h('div', { class: 'plot-tip', hidden: true, 'aria-live': 'polite', id: `${this.id}-tip` });
     this.svgHost.setAttribute('aria-describedby', this.tip.id);
     this.legend = h('div', { class: 'legend', role: 'group', 'aria-label': `${o.title || 'plot'} series` });
     this.root = h('figure', { class: 'plot', id: o.id || this.id },
-      h('figcaption', { class: 'plot-head' }, h('span', { class: 'plot-title' }, o.title || ''), this.reset),
+      h('figcaption', { class: 'plot-head' }, h('span', { class: 'plot-title' }, o.title || ''),
+        h('span', { class: 'plot-tools' }, this.reset, this.filterSelect,
+          h('span', { class: 'plot-hint', 'aria-hidden': 'true', title: 'Drag: zoom on time · wheel (click the plot first, or hold Ctrl): zoom · Shift-drag or Shift-wheel: pan · double-click or Escape: reset · legend: show/hide (Shift-click: only this one)' }, '?'))),
       h('div', { class: 'plot-wrap' }, this.svgHost, this.tip),
       this.legend);
     parent.append(this.root);
@@ -170,7 +324,44 @@ export class Plot {
   setRefLines(lines) { this.refLines = lines || []; this.update(); }
   setXUnit(u) { this.o.xUnit = u; this.update(); }
   /** Fix the unzoomed time axis to [t0, t1] (widened if data fall outside). */
-  setXDomain(t0, t1) { this.o.xDomain = Number.isFinite(t0) && Number.isFinite(t1) && t1 > t0 ? [t0, t1] : null; this.update(); }
+  setXDomain(t0, t1) {
+    this.o.xDomain = Number.isFinite(t0) && Number.isFinite(t1) && t1 > t0 ? [t0, t1] : null;
+    this.updateFilterChoices();
+    this.update();
+  }
+
+  /** Offer filter windows for the time span (the chosen position in the list is kept). */
+  updateFilterChoices() {
+    const sel = this.filterSelect;
+    if (!sel) return;
+    const full = this.fullRange();
+    const ws = filterWindows(full ? full[1] - full[0] : 0);
+    const key = ws.join(',');
+    if (key === this.filterKey) return;
+    this.filterKey = key;
+    sel.replaceChildren(...ws.map((w) => h('option', { value: String(w) }, w ? `mean over ${si(w, 's', 3)}` : 'unfiltered')));
+    const i = Math.min(this.filterIndex, ws.length - 1);
+    sel.selectedIndex = i;
+    this.window = ws[i];
+  }
+
+  /** The series as drawn: filtered when a window is chosen (cached per series). */
+  viewSeries() {
+    const w = this.window;
+    if (!(w > 0)) return this.series;
+    return this.series.map((s) => {
+      const c = s.filtered;
+      const n = s.ys.length;
+      if (c && c.w === w && c.src === s.ys && c.n < n) {
+        // samples were appended: only outputs within w/2 of the new ones change
+        movingMean(s.xs, s.ys, w, lowerBound(s.xs, s.xs[c.n] - w / 2), c.ys);
+        c.n = n;
+      } else if (!c || c.w !== w || c.src !== s.ys || c.n !== n) {
+        s.filtered = { w, src: s.ys, n, ys: movingMean(s.xs, s.ys, w) };
+      }
+      return { ...s, ys: s.filtered.ys };
+    });
+  }
   clear() { this.series = []; this.legendDirty = true; this.update(); }
 
   resetZoom() {
@@ -196,6 +387,14 @@ export class Plot {
     return lo <= hi ? [lo, hi] : null;
   }
 
+  /** The unzoomed time range: the data's, widened to the fixed domain if one is set. */
+  fullRange() {
+    const full = this.dataXRange();
+    const d = this.o.xDomain;
+    if (d) return full ? [Math.min(d[0], full[0]), Math.max(d[1], full[1])] : [d[0], d[1]];
+    return full;
+  }
+
   layout() {
     // room on the right for the reference-line labels
     const width = Math.max(240, this.svgHost.clientWidth || 600);
@@ -204,14 +403,12 @@ export class Plot {
     this.labelsInside = width < 520;
     this.M.right = longest && !this.labelsInside ? Math.min(160, 10 + longest * 6.3) : 16;
     const height = this.o.height;
-    let full = this.dataXRange();
     // a known time span (0 … end time) keeps the axis still while a live run fills it
-    const d = this.o.xDomain;
-    if (d) full = full ? [Math.min(d[0], full[0]), Math.max(d[1], full[1])] : [d[0], d[1]];
+    const full = this.fullRange();
     let [x0, x1] = this.zoom || full || [0, 1];
     if (x1 <= x0) { const d = Math.abs(x0) * 0.05 || 1e-9; x0 -= d; x1 += d; }
     let y0 = Infinity, y1 = -Infinity;
-    for (const s of this.series) {
+    for (const s of this.view) {
       if (!s.visible) continue;
       const a = Math.max(0, lowerBound(s.xs, x0) - 1), b = Math.min(s.xs.length, lowerBound(s.xs, x1) + 1);
       for (let i = a; i < b; i++) {
@@ -238,6 +435,8 @@ export class Plot {
 
   render() {
     if (this.legendDirty) this.renderLegend();
+    this.updateFilterChoices();
+    this.view = this.viewSeries();
     const L = (this.L = this.layout());
     this.lastWidth = this.svgHost.clientWidth;
     const { width, height, x0, x1, y0, y1, pw, ph, sx, sy } = L;
@@ -290,7 +489,7 @@ export class Plot {
     }
     // series
     parts.push(`<g class="series" clip-path="url(#${this.id}-clip)">`);
-    for (const s of this.series) {
+    for (const s of this.view) {
       if (!s.visible || !s.xs.length) continue;
       const d = this.pathFor(s, L);
       if (d) parts.push(`<path d="${d}" stroke="${s.color}"${s.dash ? ` stroke-dasharray="${s.dash}"` : ''}/>`);
@@ -303,6 +502,8 @@ export class Plot {
     this.svgHost.innerHTML = parts.join('');
     this.svg = this.svgHost.firstChild;
     this.reset.hidden = !this.zoom;
+    // the shown range and the plot area, for tests and scripts
+    Object.assign(this.root.dataset, { x0: String(x0), x1: String(x1), zoomed: String(Boolean(this.zoom)), areaLeft: String(this.M.left), areaTop: String(this.M.top), areaWidth: String(pw), areaHeight: String(ph) });
     this.renderHover();
   }
 
@@ -311,34 +512,21 @@ export class Plot {
     const a = Math.max(0, lowerBound(s.xs, x0) - 1), b = Math.min(s.xs.length, lowerBound(s.xs, x1) + 1);
     const out = [];
     let pen = false;
-    const emit = (x, y) => {
-      if (!Number.isFinite(y)) { pen = false; return; }
-      out.push(`${pen ? 'L' : 'M'}${sx(x).toFixed(1)} ${sy(y).toFixed(1)}`);
+    for (const i of thinIndices(s.xs, s.ys, a, b, sx, pw)) {
+      const y = s.ys[i];
+      if (!Number.isFinite(y)) { pen = false; continue; }
+      out.push(`${pen ? 'L' : 'M'}${sx(s.xs[i]).toFixed(1)} ${sy(y).toFixed(1)}`);
       pen = true;
-    };
-    if (b - a <= 2 * pw) {
-      for (let i = a; i < b; i++) emit(s.xs[i], s.ys[i]);
-    } else {
-      // per pixel column: first, min, max, last (keeps spikes visible)
-      let col = null, first, last, mn, mx, mnI, mxI;
-      const flush = () => {
-        if (col === null) return;
-        const pts = [[first, 0], [mnI, 1], [mxI, 1], [last, 2]].map(([i]) => i);
-        const uniq = [...new Set(pts)].sort((p, q) => p - q);
-        for (const i of uniq) emit(s.xs[i], s.ys[i]);
-      };
-      for (let i = a; i < b; i++) {
-        const c = Math.floor(sx(s.xs[i]));
-        const y = s.ys[i];
-        if (!Number.isFinite(y)) { flush(); col = null; emit(s.xs[i], y); continue; }
-        if (c !== col) { flush(); col = c; first = last = mnI = mxI = i; mn = mx = y; continue; }
-        last = i;
-        if (y < mn) { mn = y; mnI = i; }
-        if (y > mx) { mx = y; mxI = i; }
-      }
-      flush();
     }
     return out.join('');
+  }
+
+  /** Show or hide series by key (a legend click; `solo`: only this one, or all again). */
+  toggle(key, solo = false) {
+    const next = legendToggle(Object.fromEntries(this.series.map((s) => [s.key, s.visible])), key, solo);
+    for (const s of this.series) s.visible = next[s.key];
+    for (const b of this.legend.children) b.setAttribute('aria-pressed', String(next[b.dataset.key]));
+    this.update();
   }
 
   renderLegend() {
@@ -346,16 +534,13 @@ export class Plot {
     this.legend.replaceChildren();
     for (const s of this.series) {
       const swatch = h('span', { class: 'swatch', 'aria-hidden': 'true' });
-      swatch.innerHTML = `<svg width="22" height="10"><line x1="1" x2="21" y1="5" y2="5" stroke="${s.color}" stroke-width="2.5"${s.dash ? ` stroke-dasharray="${s.dash}"` : ''}/></svg>`;
+      swatch.innerHTML = swatchSvg(s.color, s.dash);
       const b = h('button', {
         type: 'button', class: 'legend-item', 'aria-pressed': String(s.visible),
-        title: 'Show or hide this series',
-        onclick: () => {
-          s.visible = !s.visible;
-          b.setAttribute('aria-pressed', String(s.visible));
-          this.update();
-        },
+        title: 'Show or hide this series (Shift-click: only this one)',
+        onclick: (ev) => this.toggle(s.key, ev.shiftKey),
       }, swatch, s.name);
+      b.dataset.key = s.key;
       this.legend.append(b);
     }
   }
@@ -367,25 +552,34 @@ export class Plot {
     if (this.cursorX === null || !L || !L.hasData) { g.innerHTML = ''; this.tip.hidden = true; return; }
     const x = this.cursorX;
     const xf = this.o.xUnit.factor;
-    const rows = [];
-    const marks = [];
-    let px = L.sx(x);
-    for (const s of this.series) {
-      if (!s.visible || !s.xs.length) continue;
-      const i = nearest(s.xs, x);
-      if (i < 0) continue;
-      const y = s.ys[i];
-      rows.push({ s, y, t: s.xs[i] });
-      if (Number.isFinite(y)) marks.push(`<circle cx="${L.sx(s.xs[i]).toFixed(1)}" cy="${L.sy(y).toFixed(1)}" r="3.5" fill="${s.color}" stroke="#fff"/>`);
+    const rows = hoverRows(this.view || this.series, x);
+    const marks = rows.filter((r) => Number.isFinite(r.y))
+      .map((r) => `<circle cx="${L.sx(r.t).toFixed(1)}" cy="${L.sy(r.y).toFixed(1)}" r="3.5" fill="${r.color}" stroke="#fff"/>`);
+    const px = Math.min(Math.max(L.sx(x), this.M.left), this.M.left + L.pw);
+    // crosshair: the time line, and the pointer's height when a pointer is over the plot
+    let cross = `<line x1="${px.toFixed(1)}" x2="${px.toFixed(1)}" y1="${this.M.top}" y2="${this.M.top + L.ph}"/>`;
+    const cy = this.cursorPy;
+    if (cy !== null && cy >= this.M.top && cy <= this.M.top + L.ph) {
+      cross += `<line class="cross-y" x1="${this.M.left}" x2="${this.M.left + L.pw}" y1="${cy.toFixed(1)}" y2="${cy.toFixed(1)}"/>`;
     }
-    px = Math.min(Math.max(px, this.M.left), this.M.left + L.pw);
-    g.innerHTML = `<line x1="${px.toFixed(1)}" x2="${px.toFixed(1)}" y1="${this.M.top}" y2="${this.M.top + L.ph}"/>${marks.join('')}`;
+    g.innerHTML = cross + marks.join('');
     const unit = `${this.yp.prefix}${this.o.yUnit}`;
-    this.tip.replaceChildren(
+    const cursorY = cy !== null && cy >= this.M.top && cy <= this.M.top + L.ph ? L.y0 + (1 - (cy - this.M.top) / L.ph) * (L.y1 - L.y0) : null;
+    replace(this.tip,
       h('div', { class: 'tip-x' }, `${this.o.xLabel} = ${num(x / xf, 5)} ${this.o.xUnit.unit}`),
-      ...rows.map(({ s, y }) => h('div', {},
-        h('span', { class: 'tip-swatch', style: `background:${s.color}` }),
-        `${s.name}: `, h('b', {}, `${num(y / this.yp.factor, 4)}${unit ? ` ${unit}` : ''}`))),
+      this.window > 0 ? h('div', { class: 'tip-filter muted' }, `mean over ${si(this.window, 's', 3)}`) : null,
+      ...rows.map(({ key, name, color, dash, t, y }) => {
+        const sw = h('span', { class: 'tip-swatch', 'aria-hidden': 'true' });
+        sw.innerHTML = swatchSvg(color, dash);
+        const row = h('div', { class: 'tip-row' }, sw,
+          `${name}: `, h('b', {}, `${num(y / this.yp.factor, 4)}${unit ? ` ${unit}` : ''}`));
+        // the raw sample, for tests and copy-paste: its time (s) and value (base unit)
+        row.dataset.key = key;
+        row.dataset.t = String(t);
+        row.dataset.y = String(y);
+        return row;
+      }),
+      cursorY === null ? null : h('div', { class: 'tip-cursor muted' }, `cursor: ${num(cursorY / this.yp.factor, 4)}${unit ? ` ${unit}` : ''}`),
     );
     this.tip.hidden = false;
     const left = px + 12;
@@ -396,23 +590,64 @@ export class Plot {
 
   // ---- interaction ----------------------------------------------------------------------
 
-  eventX(ev) {
+  eventPos(ev) {
     const r = this.svgHost.getBoundingClientRect();
-    return ev.clientX - r.left;
+    return [ev.clientX - r.left, ev.clientY - r.top];
+  }
+
+  /** Set the zoom (null: none) and redraw. */
+  setZoom(z) {
+    this.zoom = z;
+    this.update();
+  }
+
+  /** The shown range (the zoom, or the full range). */
+  shown() {
+    return this.zoom || (this.L ? [this.L.x0, this.L.x1] : this.fullRange());
+  }
+
+  /** Zoom by `factor` around data x `c` (default: the middle). */
+  zoomBy(factor, c) {
+    const r = this.shown();
+    if (!r) return;
+    this.setZoom(zoomAround(r, c ?? (r[0] + r[1]) / 2, factor, this.fullRange()));
+  }
+
+  /** Pan by `frac` of the shown span (negative: earlier). */
+  panFraction(frac) {
+    const r = this.shown();
+    const full = this.fullRange();
+    if (!r || !full || !this.zoom) return;
+    this.setZoom(panBy(r, frac * (r[1] - r[0]), full));
   }
 
   bindEvents() {
     const host = this.svgHost;
     let drag = null;
+    const dataX = (px) => this.L.ix(Math.min(Math.max(px, this.M.left), this.M.left + this.L.pw));
     host.addEventListener('pointerdown', (ev) => {
-      if (ev.button !== 0 || !this.L) return;
-      drag = { px: this.eventX(ev), id: ev.pointerId };
+      if (!this.L || (ev.button !== 0 && ev.button !== 1)) return;
+      const [px] = this.eventPos(ev);
+      // Shift-drag or the middle button pans (only a zoomed plot has room to pan)
+      const pan = ev.button === 1 || ev.shiftKey;
+      drag = { px, id: ev.pointerId, pan, range: this.shown() };
+      if (pan) ev.preventDefault();
       host.setPointerCapture(ev.pointerId);
     });
     host.addEventListener('pointermove', (ev) => {
       if (!this.L) return;
-      const px = this.eventX(ev);
-      this.cursorX = this.L.ix(Math.min(Math.max(px, this.M.left), this.M.left + this.L.pw));
+      const [px, py] = this.eventPos(ev);
+      this.cursorX = dataX(px);
+      this.cursorPy = py;
+      if (drag && drag.pan) {
+        const full = this.fullRange();
+        if (this.zoom && full) {
+          const [a, b] = drag.range;
+          this.zoom = panBy(drag.range, -((px - drag.px) / this.L.pw) * (b - a), full);
+          this.update();
+        }
+        return;
+      }
       if (drag && Math.abs(px - drag.px) > 3) {
         const sel = this.svg.querySelector('.sel');
         const a = Math.max(this.M.left, Math.min(drag.px, px)), b = Math.min(this.M.left + this.L.pw, Math.max(drag.px, px));
@@ -424,13 +659,13 @@ export class Plot {
     });
     const end = (ev) => {
       if (!drag) return;
-      const px = this.eventX(ev);
+      const [px] = this.eventPos(ev);
       const d = drag;
       drag = null;
       if (host.hasPointerCapture(d.id)) host.releasePointerCapture(d.id);
-      if (Math.abs(px - d.px) > 5 && this.L) {
-        const a = this.L.ix(Math.max(this.M.left, Math.min(d.px, px))), b = this.L.ix(Math.min(this.M.left + this.L.pw, Math.max(d.px, px)));
-        if (b > a) this.zoom = [a, b];
+      if (!d.pan && this.L) {
+        const r = dragRange(d.px, px, { left: this.M.left, width: this.L.pw, x0: this.L.x0, x1: this.L.x1 });
+        if (r && r[1] > r[0]) this.zoom = r;
       }
       this.update();
     };
@@ -438,34 +673,48 @@ export class Plot {
     host.addEventListener('pointercancel', () => { drag = null; this.update(); });
     host.addEventListener('pointerleave', (ev) => {
       if (drag) return;
-      if (ev.pointerType === 'mouse') { this.cursorX = null; this.renderHover(); }
+      if (ev.pointerType === 'mouse') { this.cursorX = null; this.cursorPy = null; this.renderHover(); }
     });
     host.addEventListener('dblclick', () => this.resetZoom());
-    host.addEventListener('blur', () => { this.cursorX = null; this.renderHover(); });
+    host.addEventListener('blur', () => { this.cursorX = null; this.cursorPy = null; this.renderHover(); });
     host.addEventListener('keydown', (ev) => this.onKey(ev));
+    // The wheel zooms only a focused plot (or with Ctrl), so that it still scrolls the page.
+    host.addEventListener('wheel', (ev) => {
+      if (!this.L || !(ev.ctrlKey || document.activeElement === host)) return;
+      ev.preventDefault();
+      const scale = ev.deltaMode === 1 ? 16 : ev.deltaMode === 2 ? 400 : 1;
+      const dy = ev.deltaY * scale, dx = ev.deltaX * scale;
+      if (ev.shiftKey || Math.abs(dx) > Math.abs(dy)) {
+        this.panFraction(((ev.shiftKey ? dy || dx : dx) / this.L.pw));
+      } else if (dy) {
+        const [px] = this.eventPos(ev);
+        this.zoomBy(Math.exp(Math.max(-1, Math.min(1, dy / 300))), dataX(px));
+      }
+    }, { passive: false });
   }
 
   onKey(ev) {
     const L = this.L;
     if (!L) return;
     const ref = this.series.find((s) => s.visible && s.xs.length);
-    const span = L.x1 - L.x0;
     let handled = true;
     if (ev.key === 'ArrowLeft' || ev.key === 'ArrowRight') {
       if (ref) {
         const dir = ev.key === 'ArrowLeft' ? -1 : 1;
-        let i = this.cursorX === null ? (dir > 0 ? lowerBound(ref.xs, L.x0) : lowerBound(ref.xs, L.x1) - 1) : nearest(ref.xs, this.cursorX) + dir * (ev.shiftKey ? 10 : 1);
+        let i = this.cursorX === null ? (dir > 0 ? lowerBound(ref.xs, L.x0) : lowerBound(ref.xs, L.x1) - 1) : nearestIndex(ref.xs, this.cursorX) + dir * (ev.shiftKey ? 10 : 1);
         i = Math.max(0, Math.min(ref.xs.length - 1, i));
         this.cursorX = ref.xs[i];
+        this.cursorPy = null;
       }
     } else if (ev.key === '+' || ev.key === '=') {
-      const c = this.cursorX ?? (L.x0 + L.x1) / 2;
-      this.zoom = [c - span / 4, c + span / 4];
+      this.zoomBy(0.5, this.cursorX ?? undefined);
+      return ev.preventDefault();
     } else if (ev.key === '-' || ev.key === '_') {
-      const full = this.dataXRange();
-      const c = this.cursorX ?? (L.x0 + L.x1) / 2;
-      const z = [c - span, c + span];
-      this.zoom = full && z[0] <= full[0] && z[1] >= full[1] ? null : z;
+      this.zoomBy(2, this.cursorX ?? undefined);
+      return ev.preventDefault();
+    } else if (ev.key === 'PageUp' || ev.key === 'PageDown') {
+      this.panFraction(ev.key === 'PageUp' ? -0.5 : 0.5);
+      return ev.preventDefault();
     } else if (ev.key === 'Escape' || ev.key === '0' || ev.key === 'Home') {
       this.zoom = null;
       this.cursorX = null;

@@ -26,7 +26,8 @@ export function parameterText(parameters) {
 }
 
 /**
- * Crack-tip histories of one job, per tip ("crack/tip" → {t: [], v: []}), fed with rows
+ * Crack-tip histories of one job, per tip ("crack/tip" → {t: [], v: [], l: []}: time,
+ * speed, crack length), fed with rows
  * as they arrive. Rows at or before a tip's last time are ignored, so overlapping polls do
  * not double points.
  */
@@ -46,13 +47,14 @@ export class TipHistory {
       const key = `${r.crack}/${r.tip}`;
       let s = this.tips.get(key);
       if (!s) {
-        s = { crack: Number(r.crack), tip: Number(r.tip), t: [], v: [] };
+        s = { crack: Number(r.crack), tip: Number(r.tip), t: [], v: [], l: [] };
         this.tips.set(key, s);
       }
       if (s.t.length && t <= s.t[s.t.length - 1]) continue;
       const v = r.speed === null || r.speed === undefined ? NaN : Number(r.speed);
       s.t.push(t);
       s.v.push(v);
+      s.l.push(r.length === null || r.length === undefined ? NaN : Number(r.length));
       if (Number(r.crack) > 0) this.multiCrack = true;
       if (Number.isFinite(v)) this.maxSpeed = Math.max(this.maxSpeed, Math.abs(v));
       n++;

@@ -13,10 +13,12 @@ test('tip histories ignore repeated and older rows and track the poll cursor', (
   ];
   assert.equal(h.add(rows), 3);
   // a poll with ?since= repeats the rows at the cursor: nothing doubles
-  assert.equal(h.add([rows[1], rows[2], { time: 2e-6, crack: 0, tip: 1, speed: 2551 }]), 1);
+  assert.equal(h.add([rows[1], rows[2], { time: 2e-6, crack: 0, tip: 1, speed: 2551, length: 0.012 }]), 1);
   assert.equal(h.size, 4);
   assert.deepEqual(h.tips.get('0/1').t, [0, 1e-6, 2e-6]);
   assert.deepEqual(h.tips.get('0/1').v, [0, 500, 2551]);
+  // the crack length goes with it (a gap where a row has none)
+  assert.deepEqual(h.tips.get('0/1').l.map((l) => (Number.isNaN(l) ? null : l)), [null, null, 0.012]);
   assert.equal(h.since(), 1e-6); // the slower tip decides
   assert.equal(h.maxSpeed, 2551);
   assert.equal(h.multiCrack, false);

@@ -89,12 +89,13 @@ export function compareView(main) {
     const xUnit = timeUnit(end);
     if (!refresh) {
       plots = [
-        new Plot(plotGrid, { id: 'cmp-speed', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true, xUnit, empty: 'No crack-tip data in these runs' }),
-        new Plot(plotGrid, { id: 'cmp-j', title: 'J-integral: J1 (solid), J2 (dashed)', yLabel: 'J', yUnit: 'J/m²', xUnit, empty: 'No crack-tip data in these runs' }),
+        new Plot(plotGrid, { id: 'cmp-speed', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true, xUnit, filter: 2, empty: 'No crack-tip data in these runs' }),
+        new Plot(plotGrid, { id: 'cmp-length', title: 'Crack length', yLabel: 'crack length', yUnit: 'm', xUnit, empty: 'No crack-tip data in these runs' }),
+        new Plot(plotGrid, { id: 'cmp-j', title: 'J-integral: J1 (solid), J2 (dashed)', yLabel: 'J', yUnit: 'J/m²', xUnit, filter: 0, empty: 'No crack-tip data in these runs' }),
       ];
       shownKey = list.join(',');
     }
-    const [speedPlot, jPlot] = plots;
+    const [speedPlot, lengthPlot, jPlot] = plots;
     for (const p of plots) { p.setXUnit(xUnit); p.setXDomain(0, end); }
     // reference lines: once if every run has the same material speeds, else one set per run
     const sets = ok.map((r) => ({ r, s: sceneWaveSpeeds(r.job.scene) })).filter((x) => x.s);
@@ -118,6 +119,7 @@ export function compareView(main) {
         const dash = byTip.size > 1 ? DASHES[t % DASHES.length] : '';
         const xs = rows.map((x) => x.time);
         speedPlot.setData(`${r.id}/${k}`, xs, rows.map((x) => x.speed), { name: label, color, dash });
+        lengthPlot.setData(`${r.id}/${k}`, xs, rows.map((x) => x.length), { name: label, color, dash });
         jPlot.setData(`${r.id}/${k}/1`, xs, rows.map((x) => x.j1), { name: `J1 ${label}`, color });
         jPlot.setData(`${r.id}/${k}/2`, xs, rows.map((x) => x.j2), { name: `J2 ${label}`, color, dash: DASHES[1] });
         t++;

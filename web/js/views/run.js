@@ -79,10 +79,10 @@ export function runView(main, { id }) {
 
   // ---- plots ----------------------------------------------------------------------------
   const tu0 = { factor: 1e-6, unit: 'µs' };
-  const speedPlot = new Plot(plotGrid, { id: 'plot-speed', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true, xUnit: tu0, empty: 'No crack-tip data yet' });
+  const speedPlot = new Plot(plotGrid, { id: 'plot-speed', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true, xUnit: tu0, filter: 0, empty: 'No crack-tip data yet' });
   const posPlot = new Plot(plotGrid, { id: 'plot-position', title: 'Crack-tip position and crack length', yLabel: 'position, length', yUnit: 'm', xUnit: tu0, empty: 'No crack-tip data yet' });
-  const jPlot = new Plot(plotGrid, { id: 'plot-j', title: 'J-integral (tip frame)', yLabel: 'J', yUnit: 'J/m²', xUnit: tu0, empty: 'No crack-tip data yet' });
-  const kPlot = new Plot(plotGrid, { id: 'plot-k', title: 'Stress intensity factors', yLabel: 'K', yUnit: 'Pa·√m', xUnit: tu0, empty: 'No crack-tip data yet' });
+  const jPlot = new Plot(plotGrid, { id: 'plot-j', title: 'J-integral (tip frame)', yLabel: 'J', yUnit: 'J/m²', xUnit: tu0, filter: 0, empty: 'No crack-tip data yet' });
+  const kPlot = new Plot(plotGrid, { id: 'plot-k', title: 'Stress intensity factors', yLabel: 'K', yUnit: 'Pa·√m', xUnit: tu0, filter: 0, empty: 'No crack-tip data yet' });
   const ePlot = new Plot(plotGrid, { id: 'plot-energy', title: 'Energy balance', yLabel: 'energy', yUnit: 'J', xUnit: tu0, empty: 'No energy data yet' });
   plots.push(speedPlot, posPlot, jPlot, kPlot, ePlot);
   const energyCols = [['kinetic', 'kinetic'], ['strain', 'strain'], ['external_work', 'external work'], ['dissipated', 'dissipated'], ['total_error', 'error (balance)']];

@@ -98,9 +98,14 @@ export function sweepView(main, { id }) {
     h('section', { 'aria-labelledby': 'sweep-plot-h' }, h('h2', { id: 'sweep-plot-h' }, 'Crack-tip speed of every run'), plotGrid),
     h('section', { 'aria-labelledby': 'sweep-jobs-h' }, h('h2', { id: 'sweep-jobs-h' }, 'Runs'), jobsHost));
   const speedPlot = new Plot(plotGrid, {
-    id: 'sweep-speed', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true,
+    id: 'sweep-speed', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true, filter: 2,
     xUnit: { factor: 1e-6, unit: 'µs' }, empty: 'No crack-tip data yet',
   });
+  const lengthPlot = new Plot(plotGrid, {
+    id: 'sweep-length', title: 'Crack length', yLabel: 'crack length', yUnit: 'm',
+    xUnit: { factor: 1e-6, unit: 'µs' }, empty: 'No crack-tip data yet',
+  });
+  const plots = [speedPlot, lengthPlot];
 
   async function onCancel() {
     try {
@@ -131,7 +136,7 @@ export function sweepView(main, { id }) {
       sp ? [h('dt', {}, 'Wave speeds'), h('dd', {}, `${sp.name}: c_L ${num(sp.speeds.cL, 4)}, c_S ${num(sp.speeds.cS, 4)}, c_R ${num(sp.speeds.cR, 4)}, √2·c_S ${num(sp.speeds.sqrt2cS, 4)} m/s`)] : null);
     if (sp && !refsSet) { speedPlot.setRefLines(speedRefLines(sp.speeds)); refsSet = true; }
     const end = sweep.scene && sweep.scene.time && Number(sweep.scene.time.end);
-    if (end > 0) { speedPlot.setXUnit(timeUnit(end)); speedPlot.setXDomain(0, end); }
+    if (end > 0) for (const p of plots) { p.setXUnit(timeUnit(end)); p.setXDomain(0, end); }
     replace(jobsHost, h('table', { class: 'runs sweep-jobs' },
       h('caption', { class: 'visually-hidden' }, 'Runs of the sweep'),
       h('thead', {}, h('tr', {}, ['', 'Parameters', 'Status', 'Run', 'Peak tip speed', 'Progress'].map((t, i) => h('th', { scope: 'col' }, i === 0 ? h('span', { class: 'visually-hidden' }, 'Colour') : t)))),
@@ -154,10 +159,12 @@ export function sweepView(main, { id }) {
     const color = PALETTE[i % PALETTE.length];
     let k = 0;
     for (const [key, s] of th.tips) {
-      speedPlot.setData(`${j.id}/${key}`, s.t.slice(), s.v.slice(), {
+      const style = {
         name: seriesName(j.label || j.name || j.id, s, th.tips.size, th.multiCrack),
         color, dash: th.tips.size > 1 ? DASHES[k % DASHES.length] : '',
-      });
+      };
+      speedPlot.setData(`${j.id}/${key}`, s.t.slice(), s.v.slice(), style);
+      lengthPlot.setData(`${j.id}/${key}`, s.t.slice(), s.l.slice(), style);
       k++;
     }
   }
@@ -189,7 +196,7 @@ export function sweepView(main, { id }) {
         let k = 0;
         if (th) for (const key of th.tips.keys()) rank.set(`${j.id}/${key}`, i * 1000 + k++);
       });
-      speedPlot.orderBy((key) => rank.get(key) ?? Number.MAX_SAFE_INTEGER);
+      for (const p of plots) p.orderBy((key) => rank.get(key) ?? Number.MAX_SAFE_INTEGER);
       render();
       if (isActive(sweep)) timer = setTimeout(load, 2000);
     } catch (e) {
@@ -204,5 +211,5 @@ export function sweepView(main, { id }) {
   }
 
   load();
-  return () => { alive = false; clearTimeout(timer); speedPlot.destroy(); };
+  return () => { alive = false; clearTimeout(timer); for (const p of plots) p.destroy(); };
 }
