@@ -24,8 +24,8 @@ impl Report<'_> {
             md,
             "## The seed's claims against this project's measurements\n\n\
              Speeds are mean crack-tip speeds from the tip's x; \"early\" is the mean over the first 10 µs \
-             after initiation, \"late\" the largest {:.0} µs moving-box speed after that. Verdicts are computed \
-             from the numbers by the rule stated in each row.",
+             after initiation, \"late\" the largest {:.0} µs moving-box speed after that; \"–\": no growth, or the run \
+             ends before the span. Verdicts are computed from the numbers by the rule stated in each row.",
             self.a.window * 1e6
         );
         for (scale, path) in [
@@ -83,18 +83,28 @@ impl Report<'_> {
                 pts.iter()
                     .map(|(v, s)| format!(
                         "{v} m/s: {}",
-                        s.map_or("no growth".into(), |s| format!("{s:.0}"))
+                        s.map_or("–".into(), |s| format!("{s:.0}"))
                     ))
                     .collect::<Vec<_>>()
                     .join("; "),
-                verdict(
-                    rises && saturates && near,
-                    &[
-                        (rises, "rises"),
-                        (saturates, "saturates"),
-                        (near, "near 1600 m/s"),
-                    ],
-                ),
+                {
+                    let mut v = verdict(
+                        rises && saturates && near,
+                        &[
+                            (rises, "rises"),
+                            (saturates, "saturates"),
+                            (near, "near 1600 m/s"),
+                        ],
+                    );
+                    if !near && law == Law::Motion && top > 0.0 && top < s.c_r {
+                        let _ = write!(
+                            v,
+                            "; 1600 m/s is above c_R = {:.0} m/s, which a tip-only equation of motion does not cross",
+                            s.c_r
+                        );
+                    }
+                    v
+                },
             ));
             // 2. Slow-down near 20 µs.
             if let Some(m) = sw
@@ -146,10 +156,7 @@ impl Report<'_> {
                 "mean speed over 30 µs after initiation falls strictly with J_Ic",
                 pts.iter()
                     .map(|(j, s)| {
-                        format!(
-                            "J_Ic {j}: {}",
-                            s.map_or("no growth".into(), |s| format!("{s:.0}"))
-                        )
+                        format!("J_Ic {j}: {}", s.map_or("–".into(), |s| format!("{s:.0}")))
                     })
                     .collect::<Vec<_>>()
                     .join("; "),
@@ -223,7 +230,7 @@ impl Report<'_> {
                     .map(|(mu, t, s)| {
                         format!(
                             "μ {mu}: {} / {}",
-                            t.map_or("no growth".into(), |t| format!("{:.1} µs", t * 1e6)),
+                            t.map_or("–".into(), |t| format!("{:.1} µs", t * 1e6)),
                             s.map_or("–".into(), |s| format!("{s:.0} m/s"))
                         )
                     })
@@ -477,7 +484,8 @@ impl Report<'_> {
             md,
             "\n*Last 5 µs*: the tip's advance over the last 5 µs of the run (zero for an arrested crack). \
              Fracture energy: `summary.fracture` (Γ·Δa·thickness required by the new surface, and what the growth \
-             law dissipated; the rest stays in the body). Wall: one solver thread, with other runs sharing the machine.\n"
+             law dissipated; the rest stays in the body). Wall: {} solver thread(s) per run, with {} runs sharing the machine.\n",
+            self.a.threads, self.workers
         );
         for law in [Law::Motion, Law::Wave] {
             let shares: Vec<f64> = neg.iter().filter(|n| n.1 == law).map(|n| n.0).collect();
@@ -503,13 +511,21 @@ impl Report<'_> {
                 continue;
             }
             let (lo, hi) = range(&r);
-            conclusions.push(format!(
-                "**Fracture energy, {}**: the growth dissipated {:.0}–{:.0} % of the fracture energy its new surface requires, over {} runs.",
-                law.label(),
-                lo * 100.0,
-                hi * 100.0,
-                r.len()
-            ));
+            conclusions.push(if hi <= 0.0 {
+                format!(
+                    "**Fracture energy, {}**: the growth dissipated none of the fracture energy its new surface requires, in all {} runs (it stays in the body as waves: `summary.fracture.not_dissipated`).",
+                    law.label(),
+                    r.len()
+                )
+            } else {
+                format!(
+                    "**Fracture energy, {}**: the growth dissipated {:.0}–{:.0} % of the fracture energy its new surface requires, over {} runs.",
+                    law.label(),
+                    lo * 100.0,
+                    hi * 100.0,
+                    r.len()
+                )
+            });
         }
         // Arrest: the finest equation-of-motion runs.
         for j in CONV_J {

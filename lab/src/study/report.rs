@@ -350,6 +350,23 @@ impl Report<'_> {
         c
     }
 
+    /// Whether the study ran with its default arguments.
+    fn defaults(&self) -> bool {
+        let a = self.a;
+        a.scene == Path::new("scenes/rosakis-shear-coarse.json")
+            && a.mini == Path::new("scenes/rosakis-shear-mini.json")
+            && a.out == Path::new("docs")
+            && a.end == 8.0e-5
+            && a.window == 4.0e-6
+            && a.jobs == fracture_solver::Parallelism::AllCores
+            && a.threads == fracture_solver::Parallelism::threads(1)
+            && a.min_cell == 1.25e-4
+            && a.wave_all
+            && a.convergence
+            && a.fine.is_none()
+            && a.finest.is_none()
+    }
+
     /// "23.4 min (1,404 s)": the study's wall time.
     pub(super) fn wall_label(&self) -> String {
         format!("{:.1} min ({:.0} s)", self.wall / 60.0, self.wall)
@@ -398,7 +415,7 @@ impl Report<'_> {
         let _ = writeln!(
             md,
             "## Regenerate\n\n```sh\n{}\n```\n\n\
-             (`cargo run --release -- study rosakis` with no arguments runs the same.) The study made {} distinct runs, \
+             {}The study made {} distinct runs, \
              {} at a time with {} solver thread(s) each, in **{}** on this machine ({} cores; 1-minute load \
              average {} when the last run had finished, other work included).\n\n\
              Each run is the base scene with the parameters set by JSON path, exactly as \
@@ -416,6 +433,11 @@ impl Report<'_> {
              version of this page took them from the crack's polyline length, whose points move with the deforming \
              faces (it kept changing after an arrest).\n",
             self.command(),
+            if self.defaults() {
+                "(`cargo run --release -- study rosakis` with no arguments runs the same.) "
+            } else {
+                "(Not the defaults: `cargo run --release -- study rosakis` runs the full study.) "
+            },
             self.runs,
             self.workers,
             self.a.threads,
