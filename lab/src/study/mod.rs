@@ -117,6 +117,11 @@ struct Job {
 
 fn rosakis(a: &StudyArgs) -> anyhow::Result<()> {
     let started = Instant::now();
+    anyhow::ensure!(
+        a.min_cell.is_finite() && a.min_cell > 0.0,
+        "--min-cell must be a positive cell size in metres, got {}",
+        a.min_cell
+    );
     let figs = a.out.join("rosakis");
     std::fs::create_dir_all(&figs).with_context(|| format!("creating {}", figs.display()))?;
     let sweeps = sweeps(a)?;

@@ -450,6 +450,8 @@ pub(super) fn sweeps(a: &StudyArgs) -> anyhow::Result<Vec<Sweep>> {
             legend: |r| format!("J_Ic = {} J/m²", r.j_ic),
         });
     }
+    // A `--min-cell` above a sweep's cell sizes leaves it without runs.
+    out.retain(|s| !s.runs.is_empty());
     Ok(out)
 }
 
