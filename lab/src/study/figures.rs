@@ -18,7 +18,7 @@ impl Report<'_> {
     /// a table of runs against [`FRINGE_TIMES`].
     pub(super) fn fringes(&self, md: &mut String, sw: &Sweep) -> anyhow::Result<()> {
         if !matches!(
-            sw.id,
+            sw.id.as_str(),
             "toughness" | "friction" | "toughness-fine" | "friction-fine"
         ) {
             return Ok(());

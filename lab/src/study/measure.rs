@@ -1,9 +1,16 @@
 //! What one run measures (`Measured`): the tip of the first crack, collected by the run's
-//! sink (`Collect`), the speed measures taken from its length (initiation, window means,
-//! moving-box speeds, the slow-down), the distance from the bond, the fringe snapshots.
+//! sink (`Collect`), the speed measures taken from the tip's position along the bond, its x
+//! (initiation, the mean to the end, window means, moving-box speeds, the slow-down), J1 of
+//! the running tip, the fracture energy, the distance from the bond, the fringe snapshots.
+//!
+//! The speed is the tip's material coordinate along the bond, x(t), and not the crack
+//! length: the length is measured along the crack's polyline, whose points move with the
+//! deforming faces, so it changes after an arrest and runs ahead of the tip on a wavy crack.
 
 use fracture_api::Scene;
-use fracture_api::results::{CrackTipRow, EnergyRow, Progress, RunStatus, Snapshot, Summary};
+use fracture_api::results::{
+    CrackTipRow, EnergyRow, FractureEnergy, Progress, RunStatus, Snapshot, Summary,
+};
 use fracture_worker::{Control, RunOptions, RunSink, SinkError, run_scene};
 
 /// Times (s after impact) of the fringe pictures.
@@ -18,13 +25,18 @@ pub(super) struct Measured {
     pub(super) psps: f64,
     pub(super) steps: u64,
     pub(super) particles: u64,
-    /// Tip samples: time (s), crack length (m), tip y (m), the solver's tip speed (m/s,
-    /// moving box over the scene's `output.speed_window`).
+    /// Tip samples: time (s), crack length along the polyline (m), tip x and y (m), the
+    /// solver's tip speed (m/s, moving box of the polyline length over the scene's
+    /// `output.speed_window`), whether the tip advanced in the sample's step, J1 (J/m²).
     pub(super) t: Vec<f64>,
     pub(super) len: Vec<f64>,
     pub(super) y: Vec<f64>,
     pub(super) x: Vec<f64>,
     pub(super) speed: Vec<f64>,
+    pub(super) growing: Vec<bool>,
+    pub(super) j1: Vec<f64>,
+    /// The run's fracture energy (summary), if a tip grew.
+    pub(super) fracture: Option<FractureEnergy>,
     /// Fringe snapshots at `FRINGE_TIMES`.
     pub(super) fringes: Vec<Snapshot>,
     /// Largest distance (m) of the tip from the bond's material line: the tip's y against the
@@ -33,13 +45,12 @@ pub(super) struct Measured {
 }
 
 impl Measured {
-    /// Time of the first growth (s), if any.
+    /// Time of the first growth (s): the first sample whose step advanced the tip.
     pub(super) fn initiation(&self) -> Option<f64> {
-        let l0 = *self.len.first()?;
         self.t
             .iter()
-            .zip(&self.len)
-            .find(|(_, l)| **l > l0 + 1.0e-5)
+            .zip(&self.growing)
+            .find(|(_, g)| **g)
             .map(|(t, _)| *t)
     }
     /// The initiation time for tables: "12.3 µs", or "none".
@@ -47,29 +58,39 @@ impl Measured {
         self.initiation()
             .map_or("none".to_string(), |t| format!("{:.1} µs", t * 1e6))
     }
-    /// Mean tip speed from initiation to the end of the run (m/s), if the crack grew.
+    /// Mean tip speed from the first growing sample to the last sample (m/s), from x, if the
+    /// crack grew.
     pub(super) fn mean_to_end(&self) -> Option<f64> {
-        let t0 = self.initiation()?;
-        self.mean_speed(t0, self.t.last().copied().unwrap_or(t0))
+        let i0 = self.growing.iter().position(|&g| g)?;
+        let (t0, x0) = (self.t[i0], self.x[i0]);
+        let (&t1, &x1) = (self.t.last()?, self.x.last()?);
+        (t1 > t0).then(|| (x1 - x0) / (t1 - t0))
     }
-    /// Crack length at time `t` (linear interpolation, clamped).
-    fn length_at(&self, t: f64) -> f64 {
-        match self.t.iter().position(|&x| x >= t) {
-            None => self.len.last().copied().unwrap_or(0.0),
-            Some(0) => self.len.first().copied().unwrap_or(0.0),
+    /// How far the tip moved along the bond (m): its last x less its first.
+    pub(super) fn extension(&self) -> f64 {
+        match (self.x.first(), self.x.last()) {
+            (Some(a), Some(b)) => b - a,
+            _ => 0.0,
+        }
+    }
+    /// The tip's x at time `t` (linear interpolation, clamped).
+    fn x_at(&self, t: f64) -> f64 {
+        match self.t.iter().position(|&s| s >= t) {
+            None => self.x.last().copied().unwrap_or(0.0),
+            Some(0) => self.x.first().copied().unwrap_or(0.0),
             Some(i) => {
                 let (t0, t1) = (self.t[i - 1], self.t[i]);
                 let f = if t1 > t0 { (t - t0) / (t1 - t0) } else { 1.0 };
-                self.len[i - 1] + f * (self.len[i] - self.len[i - 1])
+                self.x[i - 1] + f * (self.x[i] - self.x[i - 1])
             }
         }
     }
-    /// Mean tip speed over [a, b] (s), from the crack length.
+    /// Mean tip speed over [a, b] (s), from x.
     pub(super) fn mean_speed(&self, a: f64, b: f64) -> Option<f64> {
         let end = *self.t.last()?;
-        (b <= end + 1e-12 && b > a).then(|| (self.length_at(b) - self.length_at(a)) / (b - a))
+        (b <= end + 1e-12 && b > a).then(|| (self.x_at(b) - self.x_at(a)) / (b - a))
     }
-    /// Moving-box speed over `w` (s) at every sample that has the whole box.
+    /// Moving-box speed from x over `w` (s) at every sample that has the whole box.
     pub(super) fn box_speed(&self, w: f64) -> Vec<[f64; 2]> {
         let Some(&end) = self.t.last() else {
             return Vec::new();
@@ -77,13 +98,21 @@ impl Measured {
         self.t
             .iter()
             .filter(|&&t| t - 0.5 * w >= 0.0 && t + 0.5 * w <= end)
-            .map(|&t| {
-                [
-                    t,
-                    (self.length_at(t + 0.5 * w) - self.length_at(t - 0.5 * w)) / w,
-                ]
-            })
+            .map(|&t| [t, (self.x_at(t + 0.5 * w) - self.x_at(t - 0.5 * w)) / w])
             .collect()
+    }
+    /// Of the running samples (those whose step advanced the tip), how many have J1 below
+    /// −`frac`·Γ, and how many there are.
+    pub(super) fn negative_j(&self, gamma: f64, frac: f64) -> (usize, usize) {
+        let running: Vec<f64> = self
+            .growing
+            .iter()
+            .zip(&self.j1)
+            .filter(|(g, _)| **g)
+            .map(|(_, j)| *j)
+            .collect();
+        let low = running.iter().filter(|&&j| j < -frac * gamma).count();
+        (low, running.len())
     }
     /// Largest distance of the tip from the initial bond line (m): the first tip sample is
     /// on the bond.
@@ -140,6 +169,8 @@ impl RunSink for Collect {
             self.m.y.push(r.y);
             self.m.x.push(r.x);
             self.m.speed.push(r.speed);
+            self.m.growing.push(r.growing);
+            self.m.j1.push(r.j1);
         }
         Ok(())
     }
@@ -165,6 +196,7 @@ impl RunSink for Collect {
         self.m.psps = s.particle_steps_per_second;
         self.m.steps = s.steps;
         self.m.particles = s.particles;
+        self.m.fracture = s.fracture;
         Ok(())
     }
 }
@@ -183,6 +215,9 @@ pub(super) fn run_one(scene: &Scene, threads: fracture_solver::Parallelism) -> M
             y: Vec::new(),
             x: Vec::new(),
             speed: Vec::new(),
+            growing: Vec::new(),
+            j1: Vec::new(),
+            fracture: None,
             fringes: Vec::new(),
             off_material: 0.0,
         },
@@ -217,8 +252,11 @@ pub(super) fn slow_down(m: &Measured, w: f64) -> (Option<f64>, f64) {
 mod tests {
     use super::*;
 
-    fn measured(t: Vec<f64>, len: Vec<f64>) -> Measured {
+    /// A run whose tip is at `x(t)`, grows where `x` rises, and whose polyline length is
+    /// `len(t)`.
+    fn measured(t: Vec<f64>, x: Vec<f64>, len: Vec<f64>) -> Measured {
         let n = t.len();
+        let growing = (0..n).map(|i| i > 0 && x[i] > x[i - 1]).collect();
         Measured {
             status: RunStatus::Completed,
             message: None,
@@ -229,38 +267,90 @@ mod tests {
             t,
             len,
             y: vec![0.0; n],
-            x: vec![0.0; n],
+            x,
             speed: vec![0.0; n],
+            growing,
+            j1: vec![100.0; n],
+            fracture: None,
             fringes: Vec::new(),
             off_material: 0.0,
         }
     }
 
-    /// A tip at rest until 10 µs, then at 1000 m/s: initiation, mean and box speeds.
+    /// A tip at rest until 10 µs, then at 1000 m/s along x: initiation, mean and box speeds
+    /// from x; the polyline length runs 1.5 times as fast (a wavy crack, faces moving) and
+    /// does not enter the speeds.
     #[test]
-    fn speeds_from_crack_length() {
-        let t: Vec<f64> = (0..=400).map(|i| i as f64 * 1e-7).collect();
+    fn speeds_from_the_tip_position() {
+        let t: Vec<f64> = (0..=400).map(|i| f64::from(i) * 1e-7).collect();
+        let x: Vec<f64> = t
+            .iter()
+            .map(|&t| 0.017 + 1000.0 * (t - 1.0e-5).max(0.0))
+            .collect();
         let len: Vec<f64> = t
             .iter()
-            .map(|&t| 0.025 + 1000.0 * (t - 1.0e-5).max(0.0))
+            .map(|&t| 0.015 + 1500.0 * (t - 1.0e-5).max(0.0))
             .collect();
-        let m = measured(t, len);
+        let m = measured(t, x, len);
         let t0 = m.initiation().unwrap_or(0.0);
         assert!((t0 - 1.0e-5).abs() < 1.5e-7, "initiation {t0}");
+        let v = m.mean_to_end().unwrap_or(0.0);
+        assert!((v - 1000.0).abs() < 1e-6, "mean to end {v}");
         let v = m.mean_speed(2.0e-5, 3.0e-5).unwrap_or(0.0);
         assert!((v - 1000.0).abs() < 1e-6, "{v}");
         assert!(m.mean_speed(2.0e-5, 5.0e-5).is_none());
+        assert!((m.extension() - 0.03).abs() < 1e-9, "{}", m.extension());
         let b = m.box_speed(2.0e-6);
         assert!(b.iter().all(|p| p[1] >= -1e-9 && p[1] <= 1000.0 + 1e-6));
         assert!(b.iter().any(|p| (p[1] - 1000.0).abs() < 1e-6));
         assert_eq!(slow_down(&m, 2.0e-6).0, None);
     }
 
+    /// A tip that runs 10 mm and arrests while the polyline keeps changing length (its points
+    /// move with the faces): the speed from x is 10 mm over the run, the length's would not be.
+    #[test]
+    fn arrest_is_read_from_x_not_the_length() {
+        let t: Vec<f64> = (0..=300).map(|i| f64::from(i) * 1e-7).collect();
+        let x: Vec<f64> = t
+            .iter()
+            .map(|&t| 0.017 + 1000.0 * (t.min(2.0e-5) - 1.0e-5).max(0.0))
+            .collect();
+        let len: Vec<f64> = t
+            .iter()
+            .zip(&x)
+            .map(|(&t, &x)| x - 0.002 + 2.0e-3 * (t * 2.0e6).sin() * (t > 2.0e-5) as u8 as f64)
+            .collect();
+        let m = measured(t, x, len);
+        let v = m.mean_to_end().unwrap_or(0.0);
+        // 10 mm from 10.1 µs (the first growing sample) to 30 µs.
+        assert!((v - 0.0099 / 1.99e-5).abs() < 1.0, "{v}");
+        assert!(
+            m.box_speed(2.0e-6)
+                .iter()
+                .filter(|p| p[0] > 2.2e-5)
+                .all(|p| p[1].abs() < 1e-9)
+        );
+    }
+
+    /// J1 of the running samples only: a stationary tip's negative J does not count.
+    #[test]
+    fn negative_j_counts_running_samples() {
+        let t: Vec<f64> = (0..10).map(|i| f64::from(i) * 1e-7).collect();
+        let x: Vec<f64> = (0..10)
+            .map(|i| if i < 5 { 0.0 } else { f64::from(i) * 1e-4 })
+            .collect();
+        let mut m = measured(t, x, vec![0.0; 10]);
+        m.j1 = vec![
+            -100.0, -100.0, 0.0, 0.0, 0.0, -30.0, -20.0, 50.0, 60.0, 70.0,
+        ];
+        assert_eq!(m.negative_j(250.0, 0.1), (1, 5));
+    }
+
     /// A tip that runs, stops and runs: the slow-down is found where it stops.
     #[test]
     fn slow_down_is_found() {
-        let t: Vec<f64> = (0..=600).map(|i| i as f64 * 1e-7).collect();
-        let len: Vec<f64> = t
+        let t: Vec<f64> = (0..=600).map(|i| f64::from(i) * 1e-7).collect();
+        let x: Vec<f64> = t
             .iter()
             .map(|&t| {
                 let run1 = 1500.0 * (t.min(3.0e-5) - 1.0e-5).max(0.0);
@@ -268,7 +358,7 @@ mod tests {
                 0.025 + run1 + run2
             })
             .collect();
-        let m = measured(t, len);
+        let m = measured(t, x.clone(), x);
         let (at, drop) = slow_down(&m, 2.0e-6);
         let at = at.unwrap_or(0.0);
         assert!((at - 3.0e-5).abs() < 1.0e-6, "slow-down at {at}");

@@ -22,6 +22,9 @@ mod sweeps;
 use std::collections::HashMap;
 use std::path::{Path, PathBuf};
 use std::process::ExitCode;
+use std::sync::Mutex;
+use std::sync::atomic::{AtomicUsize, Ordering};
+use std::time::Instant;
 
 use anyhow::Context;
 use fracture_api::validate::scene_from_value;
@@ -62,8 +65,23 @@ pub struct StudyArgs {
     #[arg(long, default_value_t = 4.0e-6)]
     pub window: f64,
     /// Solver threads per run (`all`: one per core).
-    #[arg(long, default_value = "all")]
+    #[arg(long, default_value = "1")]
     pub threads: fracture_solver::Parallelism,
+    /// Runs at a time (`all`: one per core). One thread per run and one run per core uses a
+    /// small machine best: most runs are too small to keep several threads busy.
+    #[arg(long, default_value = "all")]
+    pub jobs: fracture_solver::Parallelism,
+    /// Also run the velocity and friction sweeps under the seed's `wave` rule (the toughness
+    /// sweep always runs under both laws).
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub wave_all: bool,
+    /// Run the convergence tables on the reduced scene (cell size, J domain radius).
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub convergence: bool,
+    /// The smallest cell size (m) of the convergence tables; 1.25e-4 runs them all, 5e-4 is
+    /// a quick check (the 0.125 mm runs are most of the study's time).
+    #[arg(long, default_value_t = 1.25e-4)]
+    pub min_cell: f64,
 }
 
 /// The studies of `fracture study`.
@@ -89,45 +107,88 @@ fn read_json(p: &Path) -> anyhow::Result<Value> {
     serde_json::from_str(&text).with_context(|| format!("parsing {}", p.display()))
 }
 
+/// One run to make: its key, where it is listed, its scene and a cost estimate.
+struct Job {
+    key: String,
+    label: String,
+    scene: fracture_api::Scene,
+    cost: f64,
+}
+
 fn rosakis(a: &StudyArgs) -> anyhow::Result<()> {
+    let started = Instant::now();
+    anyhow::ensure!(
+        a.min_cell.is_finite() && a.min_cell > 0.0,
+        "--min-cell must be a positive cell size in metres, got {}",
+        a.min_cell
+    );
     let figs = a.out.join("rosakis");
     std::fs::create_dir_all(&figs).with_context(|| format!("creating {}", figs.display()))?;
     let sweeps = sweeps(a)?;
     let mut bases: HashMap<PathBuf, Value> = HashMap::new();
-    let mut results: HashMap<String, Measured> = HashMap::new();
-    let total: usize = sweeps.iter().map(|s| s.runs.len()).sum();
-    let mut done = 0;
+    let mut jobs: Vec<Job> = Vec::new();
     for sw in &sweeps {
         if !bases.contains_key(&sw.scene) {
             bases.insert(sw.scene.clone(), read_json(&sw.scene)?);
         }
         let base = &bases[&sw.scene];
         for v in &sw.runs {
-            done += 1;
             let key = v.key(&sw.scene.display().to_string());
-            if results.contains_key(&key) {
-                println!(
-                    "[{done}/{total}] {} {}: same run as before",
-                    sw.id,
-                    v.label()
-                );
+            if jobs.iter().any(|j| j.key == key) {
                 continue;
             }
-            let scene = variant_scene(base, v, sw.end.unwrap_or(a.end))
+            let end = sw.end.unwrap_or(a.end);
+            let scene = variant_scene(base, v, end)
                 .with_context(|| format!("sweep {} run {}", sw.id, v.label()))?;
-            let m = run_one(&scene, a.threads);
-            println!(
-                "[{done}/{total}] {} {}: {:?}, {:.1} s, {:.2e} particle-steps/s, crack {:.1} mm longer",
-                sw.id,
-                v.label(),
-                m.status,
-                m.wall,
-                m.psps,
-                1e3 * (m.len.last().unwrap_or(&0.0) - m.len.first().unwrap_or(&0.0))
-            );
-            results.insert(key, m);
+            // Particles × steps: area / h² × end / h.
+            let h = scene.grid.cell_size;
+            let ext = [
+                scene.grid.max[0] - scene.grid.min[0],
+                scene.grid.max[1] - scene.grid.min[1],
+            ];
+            jobs.push(Job {
+                key,
+                label: format!("{} {}", sw.id, v.label()),
+                scene,
+                cost: ext[0] * ext[1] * end / (h * h * h),
+            });
         }
     }
+    // The longest runs first, so that the last ones to finish are short.
+    jobs.sort_by(|x, y| y.cost.total_cmp(&x.cost));
+    let total = jobs.len();
+    let workers = a.jobs.resolve().clamp(1, total.max(1));
+    println!(
+        "{total} runs, {workers} at a time, {} solver thread(s) each",
+        a.threads
+    );
+    let next = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let results: Mutex<HashMap<String, Measured>> = Mutex::new(HashMap::new());
+    std::thread::scope(|s| {
+        for _ in 0..workers {
+            s.spawn(|| {
+                while let Some(job) = jobs.get(next.fetch_add(1, Ordering::Relaxed)) {
+                    let m = run_one(&job.scene, a.threads);
+                    let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                    println!(
+                        "[{n}/{total}] {}: {:?}, {:.1} s, {:.2e} particle-steps/s, tip {:.1} mm further",
+                        job.label,
+                        m.status,
+                        m.wall,
+                        m.psps,
+                        1e3 * m.extension()
+                    );
+                    if let Ok(mut r) = results.lock() {
+                        r.insert(job.key.clone(), m);
+                    }
+                }
+            });
+        }
+    });
+    let results = results
+        .into_inner()
+        .map_err(|_| anyhow::anyhow!("a run panicked"))?;
     let base = &bases[&a.scene];
     let scene0 = scene_from_value(base.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
     let speeds = scene0
@@ -145,6 +206,9 @@ fn rosakis(a: &StudyArgs) -> anyhow::Result<()> {
         load: std::fs::read_to_string("/proc/loadavg")
             .ok()
             .and_then(|l| l.split_whitespace().next().map(str::to_string)),
+        wall: started.elapsed().as_secs_f64(),
+        runs: total,
+        workers,
     };
     report.write()
 }
