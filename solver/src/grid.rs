@@ -98,6 +98,16 @@ impl GridGeom {
             (x[1] - self.origin[1]) * self.inv_h,
         ]
     }
+    /// The cell whose four nodes all lie on the grid and contain x, as (column, row) and
+    /// x's bilinear fractions (f_x, f_y) in it; None outside.
+    pub fn cell_with_fractions(&self, x: [f64; 2]) -> Option<(usize, usize, f64, f64)> {
+        let xi = self.xi(x);
+        let (cx, cy) = (xi[0].floor(), xi[1].floor());
+        if cx < 0.0 || cy < 0.0 || cx as usize + 1 >= self.nx || cy as usize + 1 >= self.ny {
+            return None;
+        }
+        Some((cx as usize, cy as usize, xi[0] - cx, xi[1] - cy))
+    }
     /// Cell (column, row) containing x (may be out of range).
     #[inline(always)]
     pub fn cell(&self, x: [f64; 2]) -> (i64, i64) {

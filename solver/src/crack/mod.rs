@@ -158,6 +158,27 @@ pub struct Fronts {
 }
 
 impl Crack {
+    /// The lengths of the segments before and after point k (0 at an end), measured on
+    /// `at` (the current line `|p| p.x` or the reference `|p| p.x0`).
+    pub(super) fn neighbour_lengths(
+        &self,
+        k: usize,
+        at: impl Fn(&CrackPoint) -> [f64; 2],
+    ) -> [f64; 2] {
+        let n = self.pts.len();
+        let back = if k > 0 {
+            dist(at(&self.pts[k - 1]), at(&self.pts[k]))
+        } else {
+            0.0
+        };
+        let fore = if k + 1 < n {
+            dist(at(&self.pts[k]), at(&self.pts[k + 1]))
+        } else {
+            0.0
+        };
+        [back, fore]
+    }
+
     /// Current length along the path, without the mouth extensions.
     pub fn length(&self) -> f64 {
         let l: f64 = self.pts.windows(2).map(|w| dist(w[0].x, w[1].x)).sum();
@@ -253,13 +274,7 @@ fn mass_weighted_at<'n>(
     node: impl Fn(usize, usize) -> Option<&'n Node>,
     q: impl Fn(&Node) -> [f64; 2],
 ) -> Option<[f64; 2]> {
-    let xi = geom.xi(x);
-    let (cx, cy) = (xi[0].floor(), xi[1].floor());
-    if cx < 0.0 || cy < 0.0 || cx as usize + 1 >= geom.nx || cy as usize + 1 >= geom.ny {
-        return None;
-    }
-    let (fx, fy) = (xi[0] - cx, xi[1] - cy);
-    let (cx, cy) = (cx as usize, cy as usize);
+    let (cx, cy, fx, fy) = geom.cell_with_fractions(x)?;
     let (mut m, mut sum) = (0.0, [0.0; 2]);
     for (a, wa) in [(0, 1.0 - fx), (1, fx)] {
         for (b, wb) in [(0, 1.0 - fy), (1, fy)] {

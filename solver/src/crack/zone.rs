@@ -33,7 +33,7 @@
 
 use crate::grid::{GridGeom, Node};
 
-use super::geometry::{crosses, dist};
+use super::geometry::crosses;
 use super::{CrackPoint, Cracks};
 
 /// Traction–separation state of one crack point.
@@ -251,16 +251,7 @@ impl Cracks {
                 let pt: CrackPoint = c.pts[k];
                 // Length share: half of each neighbouring segment (only the one towards the
                 // grown side for the scene's tip point).
-                let back = if k > 0 {
-                    dist(c.pts[k - 1].x, pt.x)
-                } else {
-                    0.0
-                };
-                let fore = if k + 1 < n {
-                    dist(pt.x, c.pts[k + 1].x)
-                } else {
-                    0.0
-                };
+                let [back, fore] = c.neighbour_lengths(k, |p| p.x);
                 let share = match zone.side {
                     1 => 0.5 * fore,
                     -1 => 0.5 * back,
@@ -352,13 +343,7 @@ impl Cracks {
         impulse: impl Fn(f64, [f64; 2]) -> [f64; 2],
     ) -> Option<[f64; 2]> {
         let eps = 1e-3 * self.h;
-        let xi = geom.xi(x);
-        let (cx, cy) = (xi[0].floor(), xi[1].floor());
-        if cx < 0.0 || cy < 0.0 || cx as usize + 1 >= geom.nx || cy as usize + 1 >= geom.ny {
-            return None;
-        }
-        let (fx, fy) = (xi[0] - cx, xi[1] - cy);
-        let (cx, cy) = (cx as usize, cy as usize);
+        let (cx, cy, fx, fy) = geom.cell_with_fractions(x)?;
         let from_above = [x[0] - eps * nrm[0], x[1] - eps * nrm[1]];
         let from_below = [x[0] + eps * nrm[0], x[1] + eps * nrm[1]];
         // At most the 4 nodes of the cell: no allocation per point and step.
@@ -428,21 +413,11 @@ impl Cracks {
         dt: f64,
     ) -> f64 {
         let c = &self.cracks[ci];
-        let n = c.pts.len();
         let pt: CrackPoint = c.pts[k];
         let Some(mut bond) = pt.bond else {
             return 0.0;
         };
-        let back = if k > 0 {
-            dist(c.pts[k - 1].x0, pt.x0)
-        } else {
-            0.0
-        };
-        let fore = if k + 1 < n {
-            dist(pt.x0, c.pts[k + 1].x0)
-        } else {
-            0.0
-        };
+        let [back, fore] = c.neighbour_lengths(k, |p| p.x0);
         bond.share = 0.5 * (back + fore);
         let nrm = c.local_normal(k); // above → below
         let up = [-nrm[0], -nrm[1]];
