@@ -123,18 +123,27 @@ fn no_scene_puts_a_crack_on_a_node_row() {
         let stem = path.file_stem().unwrap().to_str().unwrap().to_string();
         let (scene, _) = load(&stem);
         let (o, h) = (scene.grid.min, scene.grid.cell_size);
-        for (c, crack) in scene.cracks.iter().enumerate() {
-            for seg in crack.points.windows(2) {
+        // Cracks and cohesive interfaces (a bond on a node row is the same ambiguity).
+        let lines = scene
+            .cracks
+            .iter()
+            .map(|c| ("cracks", &c.points))
+            .chain(scene.interfaces.iter().map(|i| ("interfaces", &i.points)));
+        let mut count = std::collections::HashMap::new();
+        for (kind, points) in lines {
+            let c = count.entry(kind).or_insert(0usize);
+            for seg in points.windows(2) {
                 let on = nodes_on_segment(seg[0], seg[1], o, h);
                 if let Some(n) = on.first() {
                     bad.push(format!(
-                        "{stem}: cracks.{c} segment {:?}–{:?} runs through {} grid nodes, e.g. {n:?}",
+                        "{stem}: {kind}.{c} segment {:?}–{:?} runs through {} grid nodes, e.g. {n:?}",
                         seg[0],
                         seg[1],
                         on.len()
                     ));
                 }
             }
+            *c += 1;
         }
     }
     assert!(bad.is_empty(), "cracks on node rows:\n{}", bad.join("\n"));
