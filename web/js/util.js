@@ -90,6 +90,17 @@ export function etaSeconds(fraction, elapsed) {
   return elapsed * (1 - fraction) / fraction;
 }
 
+/**
+ * Name of a crack-tip row's series: `end tip`, `crack 1 start tip`, or for a cohesive
+ * interface's row (crack index past the scene's cracks, run-output.md) `interface 0 front`.
+ */
+export function tipLabel(crack, tip, multiCrack, nCracks = Infinity) {
+  const c = Number(crack);
+  if (c >= nCracks) return `interface ${c - nCracks} front`;
+  const end = Number(tip) === 0 ? 'start tip' : 'end tip';
+  return multiCrack ? `crack ${c} ${end}` : end;
+}
+
 /** The ETA text of a running job (`about 2 min 05 s left`), or '' when it cannot be told. */
 export function etaText(job, now = Date.now()) {
   if (!job || job.status !== 'running' || !job.started_at || !job.progress) return '';

@@ -5,7 +5,7 @@ import assert from 'node:assert/strict';
 import { rayleighSpeed, waveSpeeds, sceneWaveSpeeds } from '../js/waves.js';
 import { locate, splitPath, syntaxErrorPosition } from '../js/jsonlocate.js';
 import { niceTicks, placeLabels, LABEL_GAP_PX } from '../js/plot.js';
-import { prettyJson, siPrefix, num, parseLabels, etaSeconds, etaText } from '../js/util.js';
+import { prettyJson, siPrefix, num, parseLabels, etaSeconds, etaText, tipLabel } from '../js/util.js';
 import { speedRefLines } from '../js/waves.js';
 
 test('wave speeds of Homalite-100 match reference-solutions.md', () => {
@@ -121,4 +121,14 @@ test('the ETA follows the rate so far', () => {
   assert.equal(etaText({ status: 'running', started_at: started, progress: { fraction: 0.5 } }, now), 'about 1 min 00 s left');
   assert.equal(etaText({ status: 'queued', started_at: null, progress: null }, now), '');
   assert.equal(etaText({ status: 'completed', started_at: started, progress: { fraction: 1 } }, now), '');
+});
+
+test('tip labels name cracks, ends and interface fronts', () => {
+  assert.equal(tipLabel(0, 1, false, 1), 'end tip');
+  assert.equal(tipLabel(0, 0, true, 2), 'crack 0 start tip');
+  // Interface rows come after the scene's cracks (run-output.md).
+  assert.equal(tipLabel(1, 1, true, 1), 'interface 0 front');
+  assert.equal(tipLabel(3, 1, true, 1), 'interface 2 front');
+  // Unknown crack count: no row is taken for an interface.
+  assert.equal(tipLabel(5, 1, true), 'crack 5 end tip');
 });

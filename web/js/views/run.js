@@ -5,7 +5,7 @@
 import * as api from '../api.js';
 import { Plot, PALETTE, DASHES } from '../plot.js';
 import { sceneWaveSpeeds, speedRefLines } from '../waves.js';
-import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson, orderScene, etaText } from '../util.js';
+import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson, orderScene, etaText, tipLabel } from '../util.js';
 import { wallTime, labelChips } from './runs.js';
 
 const TERMINAL = new Set(['completed', 'failed', 'cancelled']);
@@ -37,10 +37,9 @@ export function snapshotComponents(snap) {
   return [...out].sort((a, b) => (COMPONENT_ORDER.indexOf(a) + 99) % 99 - (COMPONENT_ORDER.indexOf(b) + 99) % 99 || a.localeCompare(b));
 }
 
-/** Series name of a crack tip. */
-export function tipName(row, multiCrack) {
-  const end = Number(row.tip) === 0 ? 'start tip' : 'end tip';
-  return multiCrack ? `crack ${row.crack} ${end}` : end;
+/** Series name of a crack tip (or of an interface's failure front, past `nCracks`). */
+export function tipName(row, multiCrack, nCracks = Infinity) {
+  return tipLabel(row.crack, row.tip, multiCrack, nCracks);
 }
 
 export function runView(main, { id }) {
@@ -99,7 +98,8 @@ export function runView(main, { id }) {
       lastTip.set(key, t);
       if (Number(r.crack) > 0) multiCrack = true;
       const color = PALETTE[tipKeys.indexOf(key) % PALETTE.length];
-      const n = tipName(r, multiCrack);
+      const nCracks = job && job.scene && Array.isArray(job.scene.cracks) ? job.scene.cracks.length : Infinity;
+      const n = tipName(r, multiCrack, nCracks);
       speedPlot.push(key, t, r.speed, { name: `speed, ${n}`, color });
       posPlot.push(`${key}x`, t, r.x, { name: `x, ${n}`, color });
       posPlot.push(`${key}y`, t, r.y, { name: `y, ${n}`, color, dash: DASHES[1] });
