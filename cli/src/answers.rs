@@ -141,10 +141,14 @@ pub fn job_summary(job: &JobInfo, tips: &[TipStats], dashboard: &str) -> String 
             } else {
                 String::new()
             };
+            // Rows past the scene's cracks are its interfaces' failure fronts (run-output.md).
+            let n_cracks = job.scene.as_ref().map_or(usize::MAX, |sc| sc.cracks.len());
+            let what = match (t.crack as usize).checked_sub(n_cracks) {
+                Some(i) => format!("interface {i} front"),
+                None => format!("crack {} tip {}", t.crack, t.tip),
+            };
             s.push_str(&format!(
-                "    crack {} tip {}: peak {}{at}, mean {}, moved {:.3} mm ({} samples)\n",
-                t.crack,
-                t.tip,
+                "    {what}: peak {}{at}, mean {}, moved {:.3} mm ({} samples)\n",
                 speed(t.peak_speed),
                 speed(t.mean_speed),
                 1e3 * t.travelled,
