@@ -462,7 +462,9 @@ impl Cracks {
                 }
                 [j[0] * up[0] + j[1] * tan[0], j[0] * up[1] + j[1] * tan[1]]
             });
-            if let Some(a) = applied {
+            // A rigid bond is a constraint: it does no work (the surfaces' drift under it is
+            // not an opening), so nothing is booked for it.
+            if let (Some(a), Some(_)) = (applied, want) {
                 bond.last = Some((a, d));
             }
         }
