@@ -7,6 +7,7 @@ use axum::Json;
 use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::Response;
+use fracture_api::jobs::CacheMode;
 use fracture_api::jobs::{ErrorBody, ErrorDetail, JobStatus};
 use fracture_api::sweep::{self, SweepInfo, SweepJob, SweepParameter, SweepRequest};
 use fracture_api::validate;
@@ -89,6 +90,7 @@ fn sweep_job(j: &JobRow) -> Result<SweepJob, StoreError> {
         finished_at: j.finished_at.clone(),
         message: j.message.clone(),
         summary: j.summary.clone(),
+        cached_from: j.cached_from.clone(),
     })
 }
 
@@ -219,6 +221,8 @@ fn build_sweep_jobs(b: &SweepBase<'_>) -> Result<Vec<NewSweepJob>, ApiError> {
                 priority: b.priority,
                 labels,
                 rerun_of: None,
+                scene_hash: scene.hash(),
+                use_cache: true,
             },
             label,
             values: serde_json::Value::Object(values).to_string(),
@@ -362,6 +366,14 @@ pub(super) async fn create_sweep(
         })
         .await?
     };
+    let use_cache = req.cache == CacheMode::Reuse;
+    let jobs: Vec<NewSweepJob> = jobs
+        .into_iter()
+        .map(|mut j| {
+            j.job.use_cache = use_cache;
+            j
+        })
+        .collect();
     let new = NewSweep {
         id: sweep_id,
         name: req

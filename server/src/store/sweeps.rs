@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use fracture_api::sweep::SweepParameter;
 use sqlx::sqlite::SqliteRow;
 
+use super::jobs::insert_job;
 use super::{
     JobRow, NewJob, Store, StoreError, col, delete_job_rows, from_json, json_col, to_json,
 };
@@ -81,7 +82,8 @@ pub struct NewSweepJob {
 }
 
 impl Store {
-    /// Insert a sweep and all its jobs (queued) in one transaction.
+    /// Insert a sweep and all its jobs (queued, or completed copies of cached runs) in one
+    /// transaction.
     pub async fn create_sweep(
         &self,
         sw: &NewSweep,
@@ -103,22 +105,11 @@ impl Store {
         .await?;
         let row = SweepRow::decode(&row)?;
         for (i, j) in jobs.iter().enumerate() {
-            sqlx::query(
-                "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at,
-                                   sweep_id, sweep_index, sweep_label, sweep_values)
-                 VALUES (?, ?, 'queued', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'), ?, ?, ?, ?)",
+            insert_job(
+                &mut tx,
+                &j.job,
+                Some((&sw.id, i as i64, &j.label, &j.values)),
             )
-            .bind(&j.job.id)
-            .bind(&j.job.name)
-            .bind(j.job.priority)
-            .bind(to_json("labels", &j.job.labels)?)
-            .bind(&j.job.scene)
-            .bind(j.job.end_time)
-            .bind(&sw.id)
-            .bind(i as i64)
-            .bind(&j.label)
-            .bind(&j.values)
-            .execute(&mut *tx)
             .await?;
         }
         tx.commit().await?;
