@@ -316,9 +316,10 @@ pub struct Summary {
     pub fracture: Option<FractureEnergy>,
     /// Where and when the run was computed (an extension of `run-output.md`; absent in
     /// summaries written before it). With `solver_version`, `threads` and `wall_seconds`
-    /// it says which build ran the scene and on what.
+    /// it says which build ran the scene and on what. Boxed: it keeps `Summary` (in every
+    /// status event) small.
     #[serde(default, skip_serializing_if = "Option::is_none")]
-    pub provenance: Option<Provenance>,
+    pub provenance: Option<Box<Provenance>>,
 }
 
 /// Provenance of a run (`summary.provenance`).

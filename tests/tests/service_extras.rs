@@ -456,7 +456,7 @@ fn a_resubmitted_completed_scene_is_answered_from_the_cache_in_milliseconds() {
     assert_eq!(f["attempts"], 1, "it ran: {f}");
     let mut sorted = times_ms.clone();
     sorted.sort_by(f64::total_cmp);
-    println!(
+    eprintln!(
         "cache hits: POST /api/v1/jobs answered in {} ms (min {:.2}, median {:.2}, max {:.2}); \
          the original run took {:.2} s from submission to completed ({:.3} s of solver wall time)",
         times_ms

@@ -33,11 +33,11 @@ pub(crate) fn host() -> Option<String> {
 }
 
 /// Provenance of a run that started at `started_at` and ends now.
-pub(crate) fn provenance(started_at: String) -> Provenance {
-    Provenance {
+pub(crate) fn provenance(started_at: String) -> Box<Provenance> {
+    Box::new(Provenance {
         solver_commit: SOLVER_COMMIT.map(String::from),
         host: host(),
         started_at,
         finished_at: now(),
-    }
+    })
 }
