@@ -75,6 +75,9 @@ pub struct SweepRequest {
     /// `POST /api/v1/jobs`).
     #[serde(default)]
     pub cache: crate::jobs::CacheMode,
+    /// Most of the sweep's jobs running at once (≥ 1; absent: no limit).
+    #[serde(default)]
+    pub max_concurrent: Option<u32>,
 }
 
 /// One job of a sweep, as `GET /api/v1/sweeps/{id}` shows it.
@@ -141,6 +144,9 @@ pub struct SweepInfo {
     /// The jobs, in the order of the combinations (omitted in lists).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub jobs: Option<Vec<SweepJob>>,
+    /// Most of its jobs running at once (absent: no limit).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_concurrent: Option<u32>,
 }
 
 /// Overall state of a sweep from its jobs' states (see [`SweepInfo::status`]).

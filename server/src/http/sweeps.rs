@@ -58,6 +58,7 @@ fn sweep_info(row: &SweepRow, jobs: &[JobRow], full: bool) -> Result<SweepInfo, 
         priority: row.priority,
         labels: row.labels.clone(),
         parameters: row.parameters.clone(),
+        max_concurrent: row.max_concurrent,
         status: sweep::overall_status(&statuses).to_string(),
         total: jobs.len() as u64,
         counts,
@@ -341,6 +342,15 @@ pub(super) async fn create_sweep(
         .limits
         .check_names(req.name.as_deref(), &req.labels)?;
     check_parameters(&req, &st.cfg.limits)?;
+    if req.max_concurrent == Some(0) {
+        return Err(invalid_sweep(
+            vec![ErrorDetail {
+                path: "max_concurrent".into(),
+                message: "0 must be at least 1 (leave it out for no limit)".into(),
+            }],
+            "the sweep request is not valid: max_concurrent: 0 must be at least 1".into(),
+        ));
+    }
     // Build and admit every combination before storing anything.
     let sweep_id = new_job_id();
     let base_name = req
@@ -384,6 +394,7 @@ pub(super) async fn create_sweep(
         parameters: req.parameters.0,
         priority: req.priority,
         labels: req.labels,
+        max_concurrent: req.max_concurrent,
     };
     let row = st.store.create_sweep(&new, &jobs).await?;
     st.queue_changed.notify_waiters();

@@ -31,6 +31,8 @@ pub struct SweepRow {
     pub labels: BTreeMap<String, String>,
     /// RFC 3339.
     pub created_at: String,
+    /// Most of its jobs running at once (`None`: no limit).
+    pub max_concurrent: Option<u32>,
 }
 
 impl SweepRow {
@@ -44,6 +46,13 @@ impl SweepRow {
             priority: col(r, "priority")?,
             labels: json_col(r, "labels")?,
             created_at: col(r, "created_at")?,
+            max_concurrent: col::<Option<i64>>(r, "max_concurrent")?
+                .map(|n| {
+                    u32::try_from(n).map_err(|_| {
+                        StoreError::Corrupt(format!("column `max_concurrent`: {n} is not a u32"))
+                    })
+                })
+                .transpose()?,
         })
     }
 
@@ -68,6 +77,8 @@ pub struct NewSweep {
     pub priority: i64,
     /// Labels given with the request.
     pub labels: BTreeMap<String, String>,
+    /// Most of its jobs running at once (`None`: no limit).
+    pub max_concurrent: Option<u32>,
 }
 
 /// One job of a new sweep.
@@ -91,8 +102,9 @@ impl Store {
     ) -> Result<SweepRow, StoreError> {
         let mut tx = self.pool.begin().await?;
         let row = sqlx::query(
-            "INSERT INTO sweeps (id, name, scene, parameters, priority, labels, created_at)
-             VALUES (?, ?, ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'))
+            "INSERT INTO sweeps (id, name, scene, parameters, priority, labels, created_at,
+                                 max_concurrent)
+             VALUES (?, ?, ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'), ?)
              RETURNING *",
         )
         .bind(&sw.id)
@@ -101,6 +113,7 @@ impl Store {
         .bind(to_json("parameters", &sw.parameters)?)
         .bind(sw.priority)
         .bind(to_json("labels", &sw.labels)?)
+        .bind(sw.max_concurrent.map(i64::from))
         .fetch_one(&mut *tx)
         .await?;
         let row = SweepRow::decode(&row)?;
