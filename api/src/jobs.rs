@@ -71,6 +71,23 @@ pub struct JobRequest {
     /// Free labels, e.g. `{"sweep": "toughness"}`.
     #[serde(default)]
     pub labels: BTreeMap<String, String>,
+    /// Whether a completed run of the same scene may answer (extension of `api.md`).
+    #[serde(default)]
+    pub cache: CacheMode,
+}
+
+/// The `cache` field of a submission (extension of `api.md`): whether a completed job with
+/// the same canonical scene hash and solver version answers instead of a new run.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema, utoipa::ToSchema,
+)]
+#[serde(rename_all = "lowercase")]
+pub enum CacheMode {
+    /// Reuse a completed run of the same scene (the default).
+    #[default]
+    Reuse,
+    /// Run the scene again even if a completed run exists.
+    Force,
 }
 
 /// A job as the API returns it.
@@ -111,6 +128,10 @@ pub struct JobInfo {
     /// absent for other jobs).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub rerun_of: Option<String>,
+    /// The completed job whose results this one serves (a cache hit: same canonical scene
+    /// hash and solver version; extension of `api.md`, absent for jobs that ran).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cached_from: Option<String>,
 }
 
 /// One problem in an error body.

@@ -314,6 +314,25 @@ pub struct Summary {
     /// dissipates none of it). Absent for scenes without growth.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub fracture: Option<FractureEnergy>,
+    /// Where and when the run was computed (an extension of `run-output.md`; absent in
+    /// summaries written before it). With `solver_version`, `threads` and `wall_seconds`
+    /// it says which build ran the scene and on what. Boxed: it keeps `Summary` (in every
+    /// status event) small.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub provenance: Option<Box<Provenance>>,
+}
+
+/// Provenance of a run (`summary.provenance`).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
+pub struct Provenance {
+    /// Git commit the solver was built from (`null` when the build did not know it).
+    pub solver_commit: Option<String>,
+    /// Host name of the machine that ran it (`null` when it could not be read).
+    pub host: Option<String>,
+    /// When the run started (RFC 3339 UTC, before the simulation was built).
+    pub started_at: String,
+    /// When it ended (RFC 3339 UTC, as the summary was written).
+    pub finished_at: String,
 }
 
 /// Fracture energy of the growing tips of a run (J per the scene's thickness × thickness, as

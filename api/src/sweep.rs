@@ -71,6 +71,13 @@ pub struct SweepRequest {
     /// Labels added to every job (besides `sweep` and the parameter values).
     #[serde(default)]
     pub labels: BTreeMap<String, String>,
+    /// Whether combinations with a completed run of the same scene reuse it (as in
+    /// `POST /api/v1/jobs`).
+    #[serde(default)]
+    pub cache: crate::jobs::CacheMode,
+    /// Most of the sweep's jobs running at once (≥ 1; absent: no limit).
+    #[serde(default)]
+    pub max_concurrent: Option<u32>,
 }
 
 /// One job of a sweep, as `GET /api/v1/sweeps/{id}` shows it.
@@ -99,6 +106,10 @@ pub struct SweepJob {
     pub message: Option<String>,
     /// The run summary once finished.
     pub summary: Option<Summary>,
+    /// The completed job whose results this combination serves (a cache hit; absent for
+    /// jobs that ran).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub cached_from: Option<String>,
 }
 
 /// A sweep (`GET /api/v1/sweeps/{id}`; lists leave out `scene` and `jobs`).
@@ -133,6 +144,9 @@ pub struct SweepInfo {
     /// The jobs, in the order of the combinations (omitted in lists).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub jobs: Option<Vec<SweepJob>>,
+    /// Most of its jobs running at once (absent: no limit).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_concurrent: Option<u32>,
 }
 
 /// Overall state of a sweep from its jobs' states (see [`SweepInfo::status`]).

@@ -73,6 +73,10 @@ pub struct SubmitArgs {
     /// it restarts), in seconds, before giving up (exit 1).
     #[arg(long, default_value_t = 120)]
     pub retry_seconds: u64,
+    /// Run the scene even if the server has a completed run of it (`"cache": "force"`;
+    /// otherwise such a submission is answered from that run at once).
+    #[arg(long)]
+    pub no_cache: bool,
 }
 
 /// Arguments of `fracture sweep`.
@@ -105,6 +109,13 @@ pub struct SweepArgs {
     /// failed, 4 some cancelled and none failed).
     #[arg(long)]
     pub wait: bool,
+    /// Most of the sweep's jobs running at once (default: no limit).
+    #[arg(long)]
+    pub max_concurrent: Option<u32>,
+    /// Run every combination even if the server has a completed run of its scene
+    /// (`"cache": "force"`).
+    #[arg(long)]
+    pub no_cache: bool,
 }
 
 /// Parse one `--param path=v1,v2` into the path and its values.
@@ -144,6 +155,7 @@ pub fn sweep_body(
     name: Option<&str>,
     priority: i64,
     labels: &serde_json::Map<String, serde_json::Value>,
+    extra: &serde_json::Map<String, serde_json::Value>,
 ) -> String {
     let params: Vec<String> = params
         .iter()
@@ -165,6 +177,9 @@ pub fn sweep_body(
             ", \"name\": {}",
             serde_json::Value::String(n.into())
         ));
+    }
+    for (k, v) in extra {
+        body.push_str(&format!(", {}: {v}", serde_json::Value::String(k.clone())));
     }
     body.push('}');
     body
@@ -221,6 +236,13 @@ pub fn sweep(a: SweepArgs) -> ExitCode {
         Ok(l) => l,
         Err(code) => return code,
     };
+    let mut extra = serde_json::Map::new();
+    if let Some(n) = a.max_concurrent {
+        extra.insert("max_concurrent".into(), n.into());
+    }
+    if a.no_cache {
+        extra.insert("cache".into(), "force".into());
+    }
     let cfg = client::SweepConfig {
         server: a.server,
         token: a.token,
@@ -230,6 +252,7 @@ pub fn sweep(a: SweepArgs) -> ExitCode {
             a.name.as_deref(),
             a.priority.unwrap_or(0),
             &labels,
+            &extra,
         ),
         wait: a.wait,
     };
@@ -325,6 +348,13 @@ pub fn submit(a: SubmitArgs) -> ExitCode {
             "labels": labels,
         });
     }
+    if a.no_cache {
+        if body.get("scene").is_some() && body.get("grid").is_none() {
+            body["cache"] = "force".into();
+        } else {
+            body = serde_json::json!({"scene": body, "cache": "force"});
+        }
+    }
     let cfg = SubmitConfig {
         server: a.server,
         token: a.token,
@@ -401,6 +431,10 @@ mod tests {
             Some("n"),
             2,
             &serde_json::Map::new(),
+            &serde_json::json!({"max_concurrent": 3, "cache": "force"})
+                .as_object()
+                .cloned()
+                .unwrap_or_default(),
         );
         let z = body.find("z.b").unwrap_or(usize::MAX);
         let a = body.find("a.c").unwrap_or(0);
@@ -409,5 +443,7 @@ mod tests {
         assert_eq!(v["name"], "n");
         assert_eq!(v["priority"], 2);
         assert_eq!(v["parameters"]["a.c"][0], "x");
+        assert_eq!(v["max_concurrent"], 3);
+        assert_eq!(v["cache"], "force");
     }
 }

@@ -712,6 +712,7 @@ fn summary() -> Summary {
         scene_hash: String::new(),
         solver_version: String::new(),
         fracture: None,
+        provenance: None,
     }
 }
 

@@ -330,3 +330,112 @@ async fn sweeps_list_with_cursors_cancel_and_delete() {
     }
     assert!(api["components"]["schemas"]["SweepInfo"].is_object());
 }
+
+/// Claim the next job as worker `w`: its id, or `None` when nothing may be claimed.
+async fn claim(st: &AppState, w: &str) -> Option<(String, i64)> {
+    let (s, _, c) = call(
+        st,
+        post(
+            "/api/v1/worker/claim",
+            &json!({"worker_id": w, "wait_seconds": 0}),
+            Some("wt"),
+        ),
+    )
+    .await;
+    if s == StatusCode::NO_CONTENT {
+        return None;
+    }
+    assert_eq!(s, StatusCode::OK, "{c}");
+    Some((
+        c["job_id"].as_str().unwrap().to_string(),
+        c["fence"].as_i64().unwrap(),
+    ))
+}
+
+#[tokio::test]
+async fn max_concurrent_limits_the_running_jobs_of_a_sweep() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    // 0 is refused, naming the field.
+    let body = |m: Value| {
+        json!({"scene": scene(), "max_concurrent": m,
+               "parameters": {"time.end": [1.0e-5, 2.0e-5, 3.0e-5]}})
+    };
+    for bad in [json!(0), json!(-1), json!(1.5)] {
+        let (s, _, v) = call(&st, post("/api/v1/sweeps", &body(bad.clone()), None)).await;
+        assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{bad}: {v}");
+        assert_eq!(v["details"][0]["path"], "max_concurrent", "{bad}: {v}");
+    }
+    let (s, _, sw) = call(&st, post("/api/v1/sweeps", &body(json!(2)), None)).await;
+    assert_eq!(s, StatusCode::CREATED, "{sw}");
+    assert_eq!(sw["max_concurrent"], 2);
+    let jobs: Vec<String> = sw["jobs"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|j| j["id"].as_str().unwrap().to_string())
+        .collect();
+    // A lone job queued after the sweep.
+    let (s, _, lone) = call(&st, post("/api/v1/jobs", &scene(), None)).await;
+    assert_eq!(s, StatusCode::CREATED, "{lone}");
+    // Two of the sweep's jobs run; the third waits, the lone job is claimed past it.
+    let a = claim(&st, "w1").await.unwrap();
+    let b = claim(&st, "w2").await.unwrap();
+    assert_eq!([&a.0, &b.0], [&jobs[0], &jobs[1]]);
+    let c = claim(&st, "w3").await.unwrap();
+    assert_eq!(
+        c.0,
+        lone["id"].as_str().unwrap(),
+        "the lone job, not the third"
+    );
+    assert!(claim(&st, "w4").await.is_none(), "the third waits");
+    // One of the two ends: the third may run.
+    let (s, _, v) = call(
+        &st,
+        post(&format!("/api/v1/jobs/{}/cancel", a.0), &json!(null), None),
+    )
+    .await;
+    assert_eq!(s, StatusCode::OK, "{v}");
+    let (s, _, v) = call(
+        &st,
+        post(
+            &format!("/api/v1/worker/jobs/{}/heartbeat", a.0),
+            &json!({"fence": a.1}),
+            Some("wt"),
+        ),
+    )
+    .await;
+    assert_eq!(s, StatusCode::OK, "{v}");
+    assert!(claim(&st, "w4").await.is_none(), "still two running");
+    let fin = json!({"fence": a.1, "summary": {"status": "cancelled", "message": "cancelled on request",
+        "steps": 0, "time_step": 1e-7, "sim_time": 0.0, "particles": 1, "grid_nodes": 1,
+        "active_nodes_mean": 0.0, "wall_seconds": 0.0, "particle_steps_per_second": 0.0,
+        "threads": 1, "scene_hash": "h", "solver_version": "v"}});
+    let (s, _, v) = call(
+        &st,
+        post(
+            &format!("/api/v1/worker/jobs/{}/finish", a.0),
+            &fin,
+            Some("wt"),
+        ),
+    )
+    .await;
+    assert_eq!(s, StatusCode::OK, "{v}");
+    let d = claim(&st, "w4").await.unwrap();
+    assert_eq!(d.0, jobs[2]);
+    // Without a limit every job is claimable at once (and the field is absent).
+    let (_, _, free) = call(
+        &st,
+        post(
+            "/api/v1/sweeps",
+            &json!({"scene": scene(), "parameters": {"time.end": [1.0e-5, 2.0e-5, 3.0e-5]},
+                    "cache": "force"}),
+            None,
+        ),
+    )
+    .await;
+    assert!(free.get("max_concurrent").is_none(), "{free}");
+    for w in ["x1", "x2", "x3"] {
+        assert!(claim(&st, w).await.is_some(), "{w}");
+    }
+}

@@ -1097,6 +1097,60 @@ async fn run_steps(c: &Client, base: &str) {
     c.accept_alert().await.expect("confirm the deletion");
     wait_js(c, "back on the list after deleting the rerun", &format!("return location.hash === '#/runs' && document.querySelector('.table-host')?.getAttribute('aria-busy') === 'false' && !document.querySelector('tr[data-id=\"{rerun_id}\"]');"), long).await;
 
+    // 3c. run A's scene submitted again is answered from the cache: "from cache" on the
+    //     copy's page (linking run A) and in the list (deleted afterwards, like the rerun)
+    let copy = c
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             fetch('/api/v1/jobs/' + arguments[0]).then(r => r.json()) \
+             .then(j => fetch('/api/v1/jobs', {method: 'POST', headers: {'Content-Type': 'application/json'}, \
+               body: JSON.stringify({scene: j.scene})})) \
+             .then(r => r.json()).then(j => done(j.cached_from === arguments[0] ? j.id : 'ERR ' + JSON.stringify(j))) \
+             .catch(e => done('ERR ' + e));",
+            vec![json!(id_a)],
+        )
+        .await
+        .expect("resubmit run A's scene");
+    let copy_id = copy.as_str().unwrap_or_default().to_string();
+    assert!(
+        !copy_id.is_empty() && !copy_id.starts_with("ERR"),
+        "a cache hit: {copy}"
+    );
+    c.goto(&format!("{base}/#/runs/{copy_id}"))
+        .await
+        .expect("the copy's page");
+    wait_js(
+        c,
+        "the copy's page says from cache",
+        &format!("return document.getElementById('cached-from-link')?.textContent === '{id_a}' && document.getElementById('from-cache')?.textContent.startsWith('from cache');"),
+        long,
+    )
+    .await;
+    c.goto(&format!("{base}/#/runs"))
+        .await
+        .expect("the runs list");
+    wait_js(
+        c,
+        "the list marks the copy, not run A",
+        &format!("return document.querySelector('tr[data-id=\"{copy_id}\"] a.from-cache')?.textContent === 'from cache' && !!document.querySelector('tr[data-id=\"{id_a}\"]') && !document.querySelector('tr[data-id=\"{id_a}\"] a.from-cache');"),
+        long,
+    )
+    .await;
+    assert_no_console_errors(c, "from cache").await;
+    c.goto(&format!("{base}/#/runs/{copy_id}"))
+        .await
+        .expect("the copy's page");
+    wait_js(
+        c,
+        "the copy's delete button",
+        "return !!document.getElementById('delete-run');",
+        long,
+    )
+    .await;
+    click(c, "#delete-run").await;
+    c.accept_alert().await.expect("confirm the deletion");
+    wait_js(c, "back on the list after deleting the copy", &format!("return location.hash === '#/runs' && document.querySelector('.table-host')?.getAttribute('aria-busy') === 'false' && !document.querySelector('tr[data-id=\"{copy_id}\"]');"), long).await;
+
     // 4. the list shows both runs; select them and compare
     click(c, "a[data-nav=runs]").await;
     for id in [&id_a, &id_b] {

@@ -390,3 +390,88 @@ fn metrics_see_a_running_job() {
     assert_eq!(code, 200, "{v}");
     s.wait_done(&id, LONG);
 }
+
+/// Runs that are not repeated (docs/service.md, "Cache"): a completed scene submitted again
+/// is answered at once by a completed copy whose results (crack-tip rows, CSV, MCAP file,
+/// pictures) are the original's; `"cache": "force"` queues a real run. Prints the answer
+/// times of the cache hits.
+#[test]
+fn a_resubmitted_completed_scene_is_answered_from_the_cache_in_milliseconds() {
+    let dir = tempfile::tempdir().expect("tmp");
+    let s = Server::start(dir.path(), &["--workers", "1"]);
+    let scene = tiny_scene("cached plate", 200, 2);
+    let t_run = std::time::Instant::now();
+    let orig = s.submit(&json!({"scene": scene.clone()}));
+    let done = s.wait_done(&orig, LONG);
+    let run_s = t_run.elapsed().as_secs_f64();
+    assert_eq!(done["status"], "completed", "{done}");
+    // Provenance of the run: this binary's commit (as `/api/v1/version` says), a host, times.
+    let p = &done["summary"]["provenance"];
+    let version = s.get_json("/api/v1/version");
+    assert_eq!(p["solver_commit"], version["git_commit"], "{p}");
+    assert!(p["host"].as_str().is_some_and(|h| !h.is_empty()), "{p}");
+    assert!(p["started_at"].as_str() <= p["finished_at"].as_str(), "{p}");
+
+    let get = |path: String| {
+        let r = s.http.get(s.at(&path)).send().expect("GET");
+        assert_eq!(r.status().as_u16(), 200, "{path}");
+        r.bytes().expect("bytes").to_vec()
+    };
+    let mut times_ms = Vec::new();
+    let mut copies = Vec::new();
+    for _ in 0..5 {
+        let t0 = std::time::Instant::now();
+        let (code, hit) = s.post_json("/api/v1/jobs", &json!({"scene": scene.clone()}));
+        times_ms.push(t0.elapsed().as_secs_f64() * 1e3);
+        assert_eq!(code, 201, "{hit}");
+        assert_eq!(hit["status"], "completed", "answered, not queued: {hit}");
+        assert_eq!(hit["cached_from"], orig.as_str(), "{hit}");
+        assert_eq!(hit["summary"], done["summary"], "the original's summary");
+        copies.push(hit["id"].as_str().expect("id").to_string());
+    }
+    let copy = &copies[0];
+    let tips = get(format!("/api/v1/jobs/{orig}/crack-tips"));
+    let rows: Value = serde_json::from_slice(&tips).expect("json");
+    assert!(
+        rows.as_array().is_some_and(|a| a.len() > 2),
+        "the run has crack-tip rows: {rows}"
+    );
+    assert_eq!(get(format!("/api/v1/jobs/{copy}/crack-tips")), tips);
+    assert_eq!(
+        get(format!("/api/v1/jobs/{copy}/fields.mcap")),
+        get(format!("/api/v1/jobs/{orig}/fields.mcap"))
+    );
+    assert_eq!(
+        get(format!("/api/v1/jobs/{copy}/snapshots/0/sxx.png")),
+        get(format!("/api/v1/jobs/{orig}/snapshots/0/sxx.png"))
+    );
+    // No run was queued for the copies; a forced submission runs again.
+    assert_eq!(s.job(copy)["attempts"], 0);
+    let t_forced = std::time::Instant::now();
+    let forced = s.submit(&json!({"scene": scene, "cache": "force"}));
+    let f = s.wait_done(&forced, LONG);
+    eprintln!("forced run: {:.2} s", t_forced.elapsed().as_secs_f64());
+    assert_eq!(f["status"], "completed", "{f}");
+    assert!(f.get("cached_from").is_none(), "{f}");
+    assert_eq!(f["attempts"], 1, "it ran: {f}");
+    let mut sorted = times_ms.clone();
+    sorted.sort_by(f64::total_cmp);
+    eprintln!(
+        "cache hits: POST /api/v1/jobs answered in {} ms (min {:.2}, median {:.2}, max {:.2}); \
+         the original run took {:.2} s from submission to completed ({:.3} s of solver wall time)",
+        times_ms
+            .iter()
+            .map(|t| format!("{t:.2}"))
+            .collect::<Vec<_>>()
+            .join(", "),
+        sorted[0],
+        sorted[sorted.len() / 2],
+        sorted[sorted.len() - 1],
+        run_s,
+        done["summary"]["wall_seconds"].as_f64().unwrap_or(f64::NAN)
+    );
+    assert!(
+        sorted[sorted.len() / 2] < 500.0,
+        "a cache hit should answer within milliseconds: {times_ms:?}"
+    );
+}

@@ -101,6 +101,17 @@ export function tipLabel(crack, tip, multiCrack, nCracks = Infinity) {
   return multiCrack ? `crack ${c} ${end}` : end;
 }
 
+/**
+ * The "from cache" note of a job answered from a completed run of the same scene and solver
+ * version (`cached_from`, docs/service.md "Cache"): `{text, title, of}`, or null for a job
+ * that ran.
+ */
+export function cacheNote(job) {
+  const of = job && typeof job.cached_from === 'string' && job.cached_from ? job.cached_from : null;
+  if (!of) return null;
+  return { text: 'from cache', title: `Not run again: the results of run ${of} (same scene, same solver version)`, of };
+}
+
 /** The ETA text of a running job (`about 2 min 05 s left`), or '' when it cannot be told. */
 export function etaText(job, now = Date.now()) {
   if (!job || job.status !== 'running' || !job.started_at || !job.progress) return '';

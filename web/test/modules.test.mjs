@@ -5,7 +5,7 @@ import assert from 'node:assert/strict';
 import { rayleighSpeed, waveSpeeds, sceneWaveSpeeds } from '../js/waves.js';
 import { locate, splitPath, syntaxErrorPosition } from '../js/jsonlocate.js';
 import { niceTicks, placeLabels, LABEL_GAP_PX } from '../js/plot.js';
-import { prettyJson, siPrefix, num, parseLabels, etaSeconds, etaText, tipLabel } from '../js/util.js';
+import { prettyJson, siPrefix, num, parseLabels, etaSeconds, etaText, tipLabel, cacheNote } from '../js/util.js';
 import { speedRefLines } from '../js/waves.js';
 
 test('wave speeds of Homalite-100 match reference-solutions.md', () => {
@@ -131,4 +131,15 @@ test('tip labels name cracks, ends and interface fronts', () => {
   assert.equal(tipLabel(3, 1, true, 1), 'interface 2 front');
   // Unknown crack count: no row is taken for an interface.
   assert.equal(tipLabel(5, 1, true), 'crack 5 end tip');
+});
+
+test('cacheNote marks a job answered from the cache, and only such a job', () => {
+  const n = cacheNote({ id: 'b', status: 'completed', cached_from: 'a1' });
+  assert.equal(n.text, 'from cache');
+  assert.equal(n.of, 'a1');
+  assert.ok(n.title.includes('a1'));
+  assert.equal(cacheNote({ id: 'a1', status: 'completed' }), null);
+  assert.equal(cacheNote({ id: 'c', status: 'completed', cached_from: null }), null);
+  assert.equal(cacheNote({ id: 'c', status: 'queued', cached_from: '' }), null);
+  assert.equal(cacheNote(null), null);
 });

@@ -15,6 +15,7 @@
 //! The `fields.mcap` format itself lives in [`fracture_results::mcapfile`].
 
 pub mod local;
+pub mod provenance;
 pub mod remote;
 mod run;
 pub mod supervise;

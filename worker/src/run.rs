@@ -136,6 +136,15 @@ fn base_summary(scene: &Scene) -> Summary {
         scene_hash: scene.hash(),
         solver_version: fracture_api::SOLVER_VERSION.to_string(),
         fracture: None,
+        // Started now; `finished_at` is stamped again as the summary is handed over.
+        provenance: Some(crate::provenance::provenance(crate::provenance::now())),
+    }
+}
+
+/// Stamp `provenance.finished_at` (the summary is about to be handed to the sink).
+fn stamp_finish(summary: &mut Summary) {
+    if let Some(p) = summary.provenance.as_mut() {
+        p.finished_at = crate::provenance::now();
     }
 }
 
@@ -148,6 +157,7 @@ fn finish_early(
     let mut summary = base_summary(scene);
     summary.message = Some(message);
     summary.failure = Some(failure);
+    stamp_finish(&mut summary);
     // Nothing else can be done with a sink error here: the summary already says failed.
     let _ = sink.finish(&summary);
     summary
@@ -431,6 +441,7 @@ pub(crate) fn run_model<M: Model>(
         summary.status = RunStatus::Failed;
         summary.message = Some(format!("could not record results: {e}"));
     }
+    stamp_finish(&mut summary);
     if let Err(e) = lp.sink.finish(&summary)
         && summary.status == RunStatus::Completed
     {
@@ -637,6 +648,20 @@ mod tests {
         assert_eq!(s.steps, 10);
         assert_eq!((s.particles, s.grid_nodes, s.threads), (100, 36, 3));
         assert!((s.active_nodes_mean - 10.5).abs() < 1e-12);
+        // Provenance: this build, this machine, start before finish (RFC 3339 sorts as text).
+        let p = s.provenance.as_ref().expect("provenance");
+        assert_eq!(p.solver_commit.as_deref(), crate::provenance::SOLVER_COMMIT);
+        assert_eq!(p.host, crate::provenance::host());
+        assert!(p.host.as_deref().is_some_and(|h| !h.is_empty()), "{p:?}");
+        assert!(
+            p.started_at.ends_with('Z') && p.started_at <= p.finished_at,
+            "{p:?}"
+        );
+        assert_eq!(
+            sink.finished[0].provenance.as_ref(),
+            Some(p),
+            "the sink got it too"
+        );
         assert!((s.sim_time - 1.0).abs() < 1e-12);
         assert_eq!(s.solver_version, fracture_api::SOLVER_VERSION);
         assert_eq!(s.scene_hash, scene(Some(0.25), 0.5).hash());

@@ -110,6 +110,7 @@ fn local_output_writes_the_run_output_files() {
         scene_hash: "abc".into(),
         solver_version: "0.1.0".into(),
         fracture: None,
+        provenance: None,
     };
     sink.finish(&summary).unwrap();
 

@@ -7,7 +7,7 @@ use axum::Json;
 use axum::extract::{Path, RawQuery, State};
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::Response;
-use fracture_api::jobs::{ErrorBody, ErrorDetail, JobInfo, JobRequest, JobStatus};
+use fracture_api::jobs::{CacheMode, ErrorBody, ErrorDetail, JobInfo, JobRequest, JobStatus};
 use fracture_api::validate;
 use serde::Deserialize;
 
@@ -43,6 +43,7 @@ fn parse_job_request(value: serde_json::Value) -> Result<JobRequest, ApiError> {
             scene,
             priority: 0,
             labels: BTreeMap::new(),
+            cache: CacheMode::Reuse,
         })
     }
 }
@@ -80,9 +81,15 @@ pub(super) async fn create_job(
         priority: req.priority,
         labels: req.labels,
         rerun_of: None,
+        scene_hash: scene.hash(),
+        use_cache: req.cache == CacheMode::Reuse,
     };
     let row = st.store.create_job(&job).await?;
-    st.queue_changed.notify_waiters();
+    if let Some(src) = &row.cached_from {
+        tracing::info!(job = %row.id, cached_from = %src, "cache hit: the scene has a completed run");
+    } else {
+        st.queue_changed.notify_waiters();
+    }
     let h = location(&format!("/api/v1/jobs/{}", row.id));
     Ok((StatusCode::CREATED, h, Json(row.info(true)?)))
 }
@@ -258,6 +265,9 @@ pub(super) async fn rerun_job(
         priority: orig.priority,
         labels: orig.labels.clone(),
         rerun_of: Some(orig.id.clone()),
+        scene_hash: scene.hash(),
+        // A rerun is asked for by name: it always runs.
+        use_cache: false,
     };
     let row = st.store.create_job(&job).await?;
     st.queue_changed.notify_waiters();

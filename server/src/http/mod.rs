@@ -149,6 +149,27 @@ async fn job_or_404(st: &AppState, id: &str) -> Result<JobRow, ApiError> {
         .ok_or_else(|| ApiError::NotFound(format!("no job with id `{id}`")))
 }
 
+/// A job and the id its results are stored under: its own, or for a cache hit that of the
+/// completed job it was answered from (404 naming it when that job was deleted since).
+async fn results_of(st: &AppState, id: &str) -> Result<(JobRow, String), ApiError> {
+    let job = job_or_404(st, id).await?;
+    match job.cached_from.clone() {
+        None => {
+            let src = job.id.clone();
+            Ok((job, src))
+        }
+        Some(src) => {
+            if st.store.get(&src).await?.is_none() {
+                return Err(ApiError::NotFound(format!(
+                    "job `{id}` was answered from the cache with the results of job `{src}`, \
+                     which has been deleted"
+                )));
+            }
+            Ok((job, src))
+        }
+    }
+}
+
 /// Run blocking work (file IO, decoding, rendering, validation) off the async threads.
 async fn blocking<T: Send + 'static>(
     f: impl FnOnce() -> Result<T, ApiError> + Send + 'static,

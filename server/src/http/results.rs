@@ -13,7 +13,7 @@ use fracture_results::render::{self, RenderOptions, RenderReport};
 use fracture_results::vtk;
 use serde::{Deserialize, Serialize};
 
-use super::{blocking, job_or_404};
+use super::{blocking, results_of};
 use crate::error::{ApiError, ApiQuery};
 use crate::server::AppState;
 
@@ -84,8 +84,8 @@ pub(super) async fn get_crack_tips(
     ApiQuery(q): ApiQuery<SinceQuery>,
     headers: HeaderMap,
 ) -> Result<Response, ApiError> {
-    job_or_404(&st, &id).await?;
-    let rows = st.store.crack_tips(&id, q.since).await?;
+    let (_, src) = results_of(&st, &id).await?;
+    let rows = st.store.crack_tips(&src, q.since).await?;
     if wants_csv(&headers) {
         Ok(csv_response(
             &format!("{id}-crack_tips.csv"),
@@ -110,8 +110,8 @@ pub(super) async fn get_energy(
     ApiQuery(q): ApiQuery<SinceQuery>,
     headers: HeaderMap,
 ) -> Result<Response, ApiError> {
-    job_or_404(&st, &id).await?;
-    let rows = st.store.energy(&id, q.since).await?;
+    let (_, src) = results_of(&st, &id).await?;
+    let rows = st.store.energy(&src, q.since).await?;
     if wants_csv(&headers) {
         Ok(csv_response(
             &format!("{id}-energy.csv"),
@@ -132,8 +132,8 @@ pub(super) async fn list_snapshots(
     State(st): State<AppState>,
     Path(id): Path<String>,
 ) -> Result<Json<Vec<SnapshotInfo>>, ApiError> {
-    job_or_404(&st, &id).await?;
-    Ok(Json(st.store.snapshots(&id).await?))
+    let (_, src) = results_of(&st, &id).await?;
+    Ok(Json(st.store.snapshots(&src).await?))
 }
 
 /// Query of the snapshot picture routes: the render options of
@@ -347,10 +347,10 @@ pub(super) async fn snapshot_png(
         .map_err(|_| ApiError::NotFound(format!("no snapshot `{index}`")))?;
     let opts = q.options()?;
     let size_param = q.size_parameter();
-    job_or_404(&st, &id).await?;
+    let (_, src) = results_of(&st, &id).await?;
     let snap = st
         .store
-        .snapshot(&id, index)
+        .snapshot(&src, index)
         .await?
         .ok_or_else(|| ApiError::NotFound(format!("job `{id}` has no snapshot {index}")))?;
     let rendered = blocking(move || {
@@ -387,14 +387,14 @@ pub(super) async fn fields_mcap(
     State(st): State<AppState>,
     Path(id): Path<String>,
 ) -> Result<Response, ApiError> {
-    let job = job_or_404(&st, &id).await?;
-    if let Some(why) = st.files.broken(&id) {
+    let (job, src) = results_of(&st, &id).await?;
+    if let Some(why) = st.files.broken(&src) {
         return Err(ApiError::NotFound(format!(
             "job `{id}` has no MCAP file: writing it failed ({why}); its rows and snapshots \
              are served by the crack-tips, energy and snapshots routes"
         )));
     }
-    let path = st.files.mcap_path(&id);
+    let path = st.files.mcap_path(&src);
     match tokio::fs::read(&path).await {
         Ok(bytes) => Ok((
             [
@@ -442,8 +442,8 @@ pub(super) async fn vtk_zip(
     State(st): State<AppState>,
     Path(id): Path<String>,
 ) -> Result<Response, ApiError> {
-    let job = job_or_404(&st, &id).await?;
-    let index = st.store.snapshots(&id).await?;
+    let (job, src) = results_of(&st, &id).await?;
+    let index = st.store.snapshots(&src).await?;
     if index.is_empty() {
         return Err(ApiError::NotFound(match job.status {
             JobStatus::Queued | JobStatus::Running => {
@@ -458,7 +458,7 @@ pub(super) async fn vtk_zip(
     }
     let mut snaps = Vec::with_capacity(index.len());
     for s in &index {
-        if let Some(snap) = st.store.snapshot(&id, s.index).await? {
+        if let Some(snap) = st.store.snapshot(&src, s.index).await? {
             snaps.push(snap);
         }
     }

@@ -7,6 +7,7 @@ use axum::Json;
 use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::Response;
+use fracture_api::jobs::CacheMode;
 use fracture_api::jobs::{ErrorBody, ErrorDetail, JobStatus};
 use fracture_api::sweep::{self, SweepInfo, SweepJob, SweepParameter, SweepRequest};
 use fracture_api::validate;
@@ -57,6 +58,7 @@ fn sweep_info(row: &SweepRow, jobs: &[JobRow], full: bool) -> Result<SweepInfo, 
         priority: row.priority,
         labels: row.labels.clone(),
         parameters: row.parameters.clone(),
+        max_concurrent: row.max_concurrent,
         status: sweep::overall_status(&statuses).to_string(),
         total: jobs.len() as u64,
         counts,
@@ -89,6 +91,7 @@ fn sweep_job(j: &JobRow) -> Result<SweepJob, StoreError> {
         finished_at: j.finished_at.clone(),
         message: j.message.clone(),
         summary: j.summary.clone(),
+        cached_from: j.cached_from.clone(),
     })
 }
 
@@ -219,6 +222,8 @@ fn build_sweep_jobs(b: &SweepBase<'_>) -> Result<Vec<NewSweepJob>, ApiError> {
                 priority: b.priority,
                 labels,
                 rerun_of: None,
+                scene_hash: scene.hash(),
+                use_cache: true,
             },
             label,
             values: serde_json::Value::Object(values).to_string(),
@@ -337,6 +342,15 @@ pub(super) async fn create_sweep(
         .limits
         .check_names(req.name.as_deref(), &req.labels)?;
     check_parameters(&req, &st.cfg.limits)?;
+    if req.max_concurrent == Some(0) {
+        return Err(invalid_sweep(
+            vec![ErrorDetail {
+                path: "max_concurrent".into(),
+                message: "0 must be at least 1 (leave it out for no limit)".into(),
+            }],
+            "the sweep request is not valid: max_concurrent: 0 must be at least 1".into(),
+        ));
+    }
     // Build and admit every combination before storing anything.
     let sweep_id = new_job_id();
     let base_name = req
@@ -362,6 +376,14 @@ pub(super) async fn create_sweep(
         })
         .await?
     };
+    let use_cache = req.cache == CacheMode::Reuse;
+    let jobs: Vec<NewSweepJob> = jobs
+        .into_iter()
+        .map(|mut j| {
+            j.job.use_cache = use_cache;
+            j
+        })
+        .collect();
     let new = NewSweep {
         id: sweep_id,
         name: req
@@ -372,6 +394,7 @@ pub(super) async fn create_sweep(
         parameters: req.parameters.0,
         priority: req.priority,
         labels: req.labels,
+        max_concurrent: req.max_concurrent,
     };
     let row = st.store.create_sweep(&new, &jobs).await?;
     st.queue_changed.notify_waiters();

@@ -64,6 +64,10 @@ pub struct JobRow {
     pub sweep_values: Option<serde_json::Map<String, serde_json::Value>>,
     /// The job this one reruns.
     pub rerun_of: Option<String>,
+    /// SHA-256 of the canonical scene JSON (NULL for queued jobs stored before migration 6).
+    pub scene_hash: Option<String>,
+    /// The completed job whose results this one serves (a cache hit).
+    pub cached_from: Option<String>,
 }
 
 impl JobRow {
@@ -105,6 +109,8 @@ impl JobRow {
             sweep_label: col(r, "sweep_label")?,
             sweep_values: opt_json_col(r, "sweep_values")?,
             rerun_of: col(r, "rerun_of")?,
+            scene_hash: col(r, "scene_hash")?,
+            cached_from: col(r, "cached_from")?,
         })
     }
 
@@ -137,6 +143,7 @@ impl JobRow {
             message: self.message.clone(),
             sweep_id: self.sweep_id.clone(),
             rerun_of: self.rerun_of.clone(),
+            cached_from: self.cached_from.clone(),
         })
     }
 
@@ -184,29 +191,113 @@ pub struct NewJob {
     pub labels: BTreeMap<String, String>,
     /// The job this one reruns, if any.
     pub rerun_of: Option<String>,
+    /// SHA-256 of the canonical scene JSON ([`fracture_api::Scene::hash`]).
+    pub scene_hash: String,
+    /// Answer from a completed job with the same scene hash and this server's solver
+    /// version, if there is one, instead of queueing a run.
+    pub use_cache: bool,
 }
 
-impl Store {
-    /// Insert a queued job.
-    pub async fn create_job(&self, j: &NewJob) -> Result<JobRow, StoreError> {
-        let mut tx = self.pool.begin().await?;
-        let row = sqlx::query(
+/// Where a new job sits in its sweep: sweep id, index, label, `{"path": value}` JSON.
+pub(super) type SweepPlace<'a> = (&'a str, i64, &'a str, &'a str);
+
+/// The completed job a new job with this scene hash reuses: the newest completed job with
+/// that hash whose summary has `solver_version`, that is not itself a cached copy.
+async fn cache_source(
+    tx: &mut sqlx::SqliteConnection,
+    scene_hash: &str,
+    solver_version: &str,
+) -> Result<Option<String>, StoreError> {
+    Ok(sqlx::query_scalar(
+        "SELECT id FROM jobs WHERE scene_hash = ? AND status = 'completed' AND cached_from IS NULL
+           AND json_extract(summary, '$.solver_version') = ?
+         ORDER BY seq DESC LIMIT 1",
+    )
+    .bind(scene_hash)
+    .bind(solver_version)
+    .fetch_optional(&mut *tx)
+    .await?)
+}
+
+/// Insert a job: a copy of a completed run of the same scene (status `completed`, its
+/// summary and progress, `cached_from` set) when `j.use_cache` finds one, else queued.
+pub(super) async fn insert_job(
+    tx: &mut sqlx::SqliteConnection,
+    j: &NewJob,
+    sweep: Option<SweepPlace<'_>>,
+) -> Result<JobRow, StoreError> {
+    let (sweep_id, sweep_index, sweep_label, sweep_values) = match sweep {
+        Some((a, b, c, d)) => (Some(a), Some(b), Some(c), Some(d)),
+        None => (None, None, None, None),
+    };
+    let source = if j.use_cache {
+        cache_source(&mut *tx, &j.scene_hash, fracture_api::SOLVER_VERSION).await?
+    } else {
+        None
+    };
+    let labels = to_json("labels", &j.labels)?;
+    let row = if let Some(src) = source {
+        sqlx::query(
             "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at,
-                               rerun_of)
-             VALUES (?, ?, 'queued', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'), ?)
+                               started_at, finished_at, rerun_of, sweep_id, sweep_index,
+                               sweep_label, sweep_values, scene_hash, cached_from, progress,
+                               summary)
+             SELECT ?, ?, 'completed', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'),
+                    strftime('%Y-%m-%dT%H:%M:%fZ','now'), strftime('%Y-%m-%dT%H:%M:%fZ','now'),
+                    ?, ?, ?, ?, ?, ?, id, progress, summary
+             FROM jobs WHERE id = ?
              RETURNING *",
         )
         .bind(&j.id)
         .bind(&j.name)
         .bind(j.priority)
-        .bind(to_json("labels", &j.labels)?)
+        .bind(&labels)
         .bind(&j.scene)
         .bind(j.end_time)
         .bind(&j.rerun_of)
+        .bind(sweep_id)
+        .bind(sweep_index)
+        .bind(sweep_label)
+        .bind(sweep_values)
+        .bind(&j.scene_hash)
+        .bind(&src)
         .fetch_one(&mut *tx)
-        .await?;
+        .await?
+    } else {
+        sqlx::query(
+            "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at,
+                               rerun_of, sweep_id, sweep_index, sweep_label, sweep_values,
+                               scene_hash)
+             VALUES (?, ?, 'queued', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'),
+                     ?, ?, ?, ?, ?, ?)
+             RETURNING *",
+        )
+        .bind(&j.id)
+        .bind(&j.name)
+        .bind(j.priority)
+        .bind(&labels)
+        .bind(&j.scene)
+        .bind(j.end_time)
+        .bind(&j.rerun_of)
+        .bind(sweep_id)
+        .bind(sweep_index)
+        .bind(sweep_label)
+        .bind(sweep_values)
+        .bind(&j.scene_hash)
+        .fetch_one(&mut *tx)
+        .await?
+    };
+    JobRow::decode(&row)
+}
+
+impl Store {
+    /// Insert a job: queued, or a completed copy of a run of the same scene
+    /// ([`NewJob::use_cache`]).
+    pub async fn create_job(&self, j: &NewJob) -> Result<JobRow, StoreError> {
+        let mut tx = self.pool.begin().await?;
+        let row = insert_job(&mut tx, j, None).await?;
         tx.commit().await?;
-        JobRow::decode(&row)
+        Ok(row)
     }
 
     /// One job.

@@ -29,7 +29,8 @@ pub struct Claimed {
 }
 
 impl Store {
-    /// Claim the best queued job (highest priority, then oldest) for `worker`, with a lease.
+    /// Claim the best queued job (highest priority, then oldest) for `worker`, with a lease,
+    /// skipping the jobs of a sweep that has `max_concurrent` of its jobs running.
     /// A job claimed again (after a lost worker) loses the previous attempt's rows.
     pub async fn claim(
         &self,
@@ -42,8 +43,12 @@ impl Store {
             "UPDATE jobs SET status = 'running', attempts = attempts + 1, fence = fence + 1,
                 worker_id = ?, lease_until_ms = ?, message = NULL, progress = NULL,
                 started_at = strftime('%Y-%m-%dT%H:%M:%fZ','now')
-             WHERE seq = (SELECT seq FROM jobs WHERE status = 'queued'
-                          ORDER BY priority DESC, seq ASC LIMIT 1)
+             WHERE seq = (SELECT q.seq FROM jobs q LEFT JOIN sweeps s ON s.id = q.sweep_id
+                          WHERE q.status = 'queued'
+                            AND (s.max_concurrent IS NULL
+                                 OR (SELECT COUNT(*) FROM jobs r WHERE r.sweep_id = q.sweep_id
+                                       AND r.status = 'running') < s.max_concurrent)
+                          ORDER BY q.priority DESC, q.seq ASC LIMIT 1)
                AND status = 'queued'
              RETURNING *",
         )

@@ -7,6 +7,7 @@ use std::collections::BTreeMap;
 use fracture_api::sweep::SweepParameter;
 use sqlx::sqlite::SqliteRow;
 
+use super::jobs::insert_job;
 use super::{
     JobRow, NewJob, Store, StoreError, col, delete_job_rows, from_json, json_col, to_json,
 };
@@ -30,6 +31,8 @@ pub struct SweepRow {
     pub labels: BTreeMap<String, String>,
     /// RFC 3339.
     pub created_at: String,
+    /// Most of its jobs running at once (`None`: no limit).
+    pub max_concurrent: Option<u32>,
 }
 
 impl SweepRow {
@@ -43,6 +46,13 @@ impl SweepRow {
             priority: col(r, "priority")?,
             labels: json_col(r, "labels")?,
             created_at: col(r, "created_at")?,
+            max_concurrent: col::<Option<i64>>(r, "max_concurrent")?
+                .map(|n| {
+                    u32::try_from(n).map_err(|_| {
+                        StoreError::Corrupt(format!("column `max_concurrent`: {n} is not a u32"))
+                    })
+                })
+                .transpose()?,
         })
     }
 
@@ -67,6 +77,8 @@ pub struct NewSweep {
     pub priority: i64,
     /// Labels given with the request.
     pub labels: BTreeMap<String, String>,
+    /// Most of its jobs running at once (`None`: no limit).
+    pub max_concurrent: Option<u32>,
 }
 
 /// One job of a new sweep.
@@ -81,7 +93,8 @@ pub struct NewSweepJob {
 }
 
 impl Store {
-    /// Insert a sweep and all its jobs (queued) in one transaction.
+    /// Insert a sweep and all its jobs (queued, or completed copies of cached runs) in one
+    /// transaction.
     pub async fn create_sweep(
         &self,
         sw: &NewSweep,
@@ -89,8 +102,9 @@ impl Store {
     ) -> Result<SweepRow, StoreError> {
         let mut tx = self.pool.begin().await?;
         let row = sqlx::query(
-            "INSERT INTO sweeps (id, name, scene, parameters, priority, labels, created_at)
-             VALUES (?, ?, ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'))
+            "INSERT INTO sweeps (id, name, scene, parameters, priority, labels, created_at,
+                                 max_concurrent)
+             VALUES (?, ?, ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'), ?)
              RETURNING *",
         )
         .bind(&sw.id)
@@ -99,26 +113,16 @@ impl Store {
         .bind(to_json("parameters", &sw.parameters)?)
         .bind(sw.priority)
         .bind(to_json("labels", &sw.labels)?)
+        .bind(sw.max_concurrent.map(i64::from))
         .fetch_one(&mut *tx)
         .await?;
         let row = SweepRow::decode(&row)?;
         for (i, j) in jobs.iter().enumerate() {
-            sqlx::query(
-                "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at,
-                                   sweep_id, sweep_index, sweep_label, sweep_values)
-                 VALUES (?, ?, 'queued', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'), ?, ?, ?, ?)",
+            insert_job(
+                &mut tx,
+                &j.job,
+                Some((&sw.id, i as i64, &j.label, &j.values)),
             )
-            .bind(&j.job.id)
-            .bind(&j.job.name)
-            .bind(j.job.priority)
-            .bind(to_json("labels", &j.job.labels)?)
-            .bind(&j.job.scene)
-            .bind(j.job.end_time)
-            .bind(&sw.id)
-            .bind(i as i64)
-            .bind(&j.label)
-            .bind(&j.values)
-            .execute(&mut *tx)
             .await?;
         }
         tx.commit().await?;

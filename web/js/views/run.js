@@ -5,7 +5,7 @@
 import * as api from '../api.js';
 import { Plot, PALETTE, DASHES } from '../plot.js';
 import { sceneWaveSpeeds, speedRefLines } from '../waves.js';
-import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson, orderScene, etaText, tipLabel } from '../util.js';
+import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson, orderScene, etaText, tipLabel, cacheNote } from '../util.js';
 import { wallTime, labelChips } from './runs.js';
 
 const TERMINAL = new Set(['completed', 'failed', 'cancelled']);
@@ -155,6 +155,8 @@ export function runView(main, { id }) {
     renderProgress();
     replace(metaHost,
       meta('Id', h('span', { class: 'mono' }, job.id)),
+      cacheNote(job) ? meta('From cache', h('span', { id: 'from-cache', title: cacheNote(job).title }, 'from cache: the results of run ',
+        h('a', { href: `#/runs/${encodeURIComponent(job.cached_from)}`, id: 'cached-from-link', class: 'mono' }, job.cached_from))) : null,
       job.rerun_of ? meta('Rerun of', h('a', { href: `#/runs/${encodeURIComponent(job.rerun_of)}`, id: 'rerun-of-link', class: 'mono' }, job.rerun_of)) : null,
       job.sweep_id ? meta('Sweep', h('a', { href: `#/sweeps/${encodeURIComponent(job.sweep_id)}`, id: 'run-sweep-link' }, 'part of a sweep: compare its runs')) : null,
       meta('Labels', labelChips(job.labels)),

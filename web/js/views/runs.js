@@ -2,7 +2,7 @@
 // filters by status and label (kept in the URL), cursor paging, selection for compare.
 
 import { listJobs, ApiError } from '../api.js';
-import { h, replace, timeEl, duration, count, statusBadge, hashQuery, etaText } from '../util.js';
+import { h, replace, timeEl, duration, count, statusBadge, hashQuery, etaText, cacheNote } from '../util.js';
 
 const STATUSES = ['queued', 'running', 'completed', 'failed', 'cancelled'];
 const PAGE = 20;
@@ -124,9 +124,11 @@ export function runsView(main) {
         onchange: (ev) => { if (ev.target.checked) selected.add(j.id); else selected.delete(j.id); updateCompare(); },
       });
       const pss = j.summary && j.summary.particle_steps_per_second;
+      const cached = cacheNote(j);
       return h('tr', { 'data-id': j.id, 'data-status': j.status },
         h('td', { class: 'sel', 'data-label': 'Compare' }, box),
-        h('td', { 'data-label': 'Status' }, statusBadge(j.status)),
+        h('td', { 'data-label': 'Status' }, statusBadge(j.status),
+          cached ? h('div', { class: 'small-text' }, h('a', { href: `#/runs/${encodeURIComponent(cached.of)}`, class: 'badge from-cache', title: cached.title }, cached.text)) : null),
         h('td', { 'data-label': 'Name' }, h('a', { href: `#/runs/${encodeURIComponent(j.id)}`, class: 'run-link' }, j.name || j.id), h('div', { class: 'muted mono small-text' }, j.id),
           j.sweep_id ? h('div', { class: 'small-text' }, h('a', { href: `#/sweeps/${encodeURIComponent(j.sweep_id)}`, class: 'sweep-link' }, 'sweep →')) : null),
         h('td', { 'data-label': 'Labels' }, labelChips(j.labels, pick)),
