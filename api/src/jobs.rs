@@ -74,6 +74,10 @@ pub struct JobRequest {
     /// Whether a completed run of the same scene may answer (extension of `api.md`).
     #[serde(default)]
     pub cache: CacheMode,
+    /// Claims before a lost worker fails the job (≥ 1; absent: the server's
+    /// `--max-attempts`; extension of `api.md`).
+    #[serde(default)]
+    pub max_attempts: Option<u32>,
 }
 
 /// The `cache` field of a submission (extension of `api.md`): whether a completed job with
@@ -132,6 +136,10 @@ pub struct JobInfo {
     /// hash and solver version; extension of `api.md`, absent for jobs that ran).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub cached_from: Option<String>,
+    /// The job's own retry budget, when it was given one (`max_attempts` of the request;
+    /// absent: the server's `--max-attempts`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub max_attempts: Option<u32>,
 }
 
 /// One problem in an error body.

@@ -78,6 +78,9 @@ pub struct SweepRequest {
     /// Most of the sweep's jobs running at once (≥ 1; absent: no limit).
     #[serde(default)]
     pub max_concurrent: Option<u32>,
+    /// Every job's retry budget (as in `POST /api/v1/jobs`).
+    #[serde(default)]
+    pub max_attempts: Option<u32>,
 }
 
 /// One job of a sweep, as `GET /api/v1/sweeps/{id}` shows it.

@@ -439,3 +439,83 @@ async fn max_concurrent_limits_the_running_jobs_of_a_sweep() {
         assert!(claim(&st, w).await.is_some(), "{w}");
     }
 }
+
+#[tokio::test]
+async fn a_jobs_own_retry_budget_decides_when_a_lost_worker_fails_it() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let died = |id: &str, fence: i64| {
+        post(
+            &format!("/api/v1/worker/jobs/{id}/died"),
+            &json!({"fence": fence, "cause": "killed by signal 15"}),
+            Some("wt"),
+        )
+    };
+    // 0 is refused naming the field, for a job and for a sweep.
+    let (s, _, v) = call(
+        &st,
+        post(
+            "/api/v1/jobs",
+            &json!({"scene": scene(), "max_attempts": 0}),
+            None,
+        ),
+    )
+    .await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
+    assert_eq!(v["details"][0]["path"], "max_attempts", "{v}");
+    let sweep = |n: Value| {
+        json!({"scene": scene(), "max_attempts": n, "cache": "force",
+               "parameters": {"time.end": [1.0e-5, 2.0e-5]}})
+    };
+    let (s, _, v) = call(&st, post("/api/v1/sweeps", &sweep(json!(0)), None)).await;
+    assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
+    assert_eq!(v["details"][0]["path"], "max_attempts", "{v}");
+    // Budget 1: the first lost worker fails it (the server's default, 3, would re-queue).
+    let (_, _, j) = call(
+        &st,
+        post(
+            "/api/v1/jobs",
+            &json!({"scene": scene(), "max_attempts": 1}),
+            None,
+        ),
+    )
+    .await;
+    assert_eq!(j["max_attempts"], 1, "{j}");
+    let (id, fence) = claim(&st, "w1").await.unwrap();
+    let (s, _, j) = call(&st, died(&id, fence)).await;
+    assert_eq!(s, StatusCode::OK, "{j}");
+    assert_eq!(j["status"], "failed", "{j}");
+    assert!(
+        j["message"].as_str().unwrap().contains("attempt 1 of 1"),
+        "{j}"
+    );
+    // Without one: re-queued after the same death.
+    let (_, _, j) = call(
+        &st,
+        post(
+            "/api/v1/jobs",
+            &json!({"scene": scene(), "cache": "force"}),
+            None,
+        ),
+    )
+    .await;
+    assert!(j.get("max_attempts").is_none(), "{j}");
+    let (id, fence) = claim(&st, "w2").await.unwrap();
+    let (_, _, j) = call(&st, died(&id, fence)).await;
+    assert_eq!(j["status"], "queued", "{j}");
+    // A sweep's budget goes to every job; a budget of 2 re-queues once, then fails.
+    let (s, _, sw) = call(&st, post("/api/v1/sweeps", &sweep(json!(2)), None)).await;
+    assert_eq!(s, StatusCode::CREATED, "{sw}");
+    let first = sw["jobs"][0]["id"].as_str().unwrap().to_string();
+    let (_, _, j) = call(&st, get(&format!("/api/v1/jobs/{first}"))).await;
+    assert_eq!(j["max_attempts"], 2, "{j}");
+    // (the lone job re-queued above is older: claim it out of the way first)
+    let (lone, _) = claim(&st, "w3").await.unwrap();
+    assert_eq!(lone, id);
+    for (k, want) in [(1, "queued"), (2, "failed")] {
+        let (cid, fence) = claim(&st, "w4").await.unwrap();
+        assert_eq!(cid, first, "attempt {k}");
+        let (_, _, j) = call(&st, died(&cid, fence)).await;
+        assert_eq!(j["status"], want, "attempt {k}: {j}");
+    }
+}

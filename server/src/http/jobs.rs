@@ -44,8 +44,20 @@ fn parse_job_request(value: serde_json::Value) -> Result<JobRequest, ApiError> {
             priority: 0,
             labels: BTreeMap::new(),
             cache: CacheMode::Reuse,
+            max_attempts: None,
         })
     }
+}
+
+/// A job's own retry budget must allow one claim (0 would never run).
+pub(super) fn check_max_attempts(n: Option<u32>) -> Result<(), ApiError> {
+    if n == Some(0) {
+        return Err(ApiError::InvalidScene(vec![ErrorDetail {
+            path: "max_attempts".into(),
+            message: "0 must be at least 1 (leave it out for the server's --max-attempts)".into(),
+        }]));
+    }
+    Ok(())
 }
 
 /// Submit a scene (bare, or wrapped as `{scene, priority, labels}`).
@@ -72,6 +84,7 @@ pub(super) async fn create_job(
     let value: serde_json::Value = parse_json(&body)?;
     let req = parse_job_request(value)?;
     st.cfg.limits.check_names(None, &req.labels)?;
+    check_max_attempts(req.max_attempts)?;
     let (scene, _) = admit(&st, req.scene).await?;
     let job = NewJob {
         id: new_job_id(),
@@ -83,6 +96,7 @@ pub(super) async fn create_job(
         rerun_of: None,
         scene_hash: scene.hash(),
         use_cache: req.cache == CacheMode::Reuse,
+        max_attempts: req.max_attempts,
     };
     let row = st.store.create_job(&job).await?;
     if let Some(src) = &row.cached_from {
@@ -268,6 +282,7 @@ pub(super) async fn rerun_job(
         scene_hash: scene.hash(),
         // A rerun is asked for by name: it always runs.
         use_cache: false,
+        max_attempts: orig.max_attempts,
     };
     let row = st.store.create_job(&job).await?;
     st.queue_changed.notify_waiters();

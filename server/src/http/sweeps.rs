@@ -224,6 +224,7 @@ fn build_sweep_jobs(b: &SweepBase<'_>) -> Result<Vec<NewSweepJob>, ApiError> {
                 rerun_of: None,
                 scene_hash: scene.hash(),
                 use_cache: true,
+                max_attempts: None,
             },
             label,
             values: serde_json::Value::Object(values).to_string(),
@@ -351,6 +352,16 @@ pub(super) async fn create_sweep(
             "the sweep request is not valid: max_concurrent: 0 must be at least 1".into(),
         ));
     }
+    if req.max_attempts == Some(0) {
+        return Err(invalid_sweep(
+            vec![ErrorDetail {
+                path: "max_attempts".into(),
+                message: "0 must be at least 1 (leave it out for the server's --max-attempts)"
+                    .into(),
+            }],
+            "the sweep request is not valid: max_attempts: 0 must be at least 1".into(),
+        ));
+    }
     // Build and admit every combination before storing anything.
     let sweep_id = new_job_id();
     let base_name = req
@@ -381,6 +392,7 @@ pub(super) async fn create_sweep(
         .into_iter()
         .map(|mut j| {
             j.job.use_cache = use_cache;
+            j.job.max_attempts = req.max_attempts;
             j
         })
         .collect();

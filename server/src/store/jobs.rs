@@ -68,6 +68,8 @@ pub struct JobRow {
     pub scene_hash: Option<String>,
     /// The completed job whose results this one serves (a cache hit).
     pub cached_from: Option<String>,
+    /// The job's own retry budget (`None`: the server's `--max-attempts`).
+    pub max_attempts: Option<u32>,
 }
 
 impl JobRow {
@@ -111,6 +113,13 @@ impl JobRow {
             rerun_of: col(r, "rerun_of")?,
             scene_hash: col(r, "scene_hash")?,
             cached_from: col(r, "cached_from")?,
+            max_attempts: col::<Option<i64>>(r, "max_attempts")?
+                .map(|n| {
+                    u32::try_from(n).map_err(|_| {
+                        StoreError::Corrupt(format!("column `max_attempts`: {n} is not a u32"))
+                    })
+                })
+                .transpose()?,
         })
     }
 
@@ -144,6 +153,7 @@ impl JobRow {
             sweep_id: self.sweep_id.clone(),
             rerun_of: self.rerun_of.clone(),
             cached_from: self.cached_from.clone(),
+            max_attempts: self.max_attempts,
         })
     }
 
@@ -196,6 +206,8 @@ pub struct NewJob {
     /// Answer from a completed job with the same scene hash and this server's solver
     /// version, if there is one, instead of queueing a run.
     pub use_cache: bool,
+    /// The job's own retry budget (`None`: the server's `--max-attempts`).
+    pub max_attempts: Option<u32>,
 }
 
 /// Where a new job sits in its sweep: sweep id, index, label, `{"path": value}` JSON.
@@ -240,11 +252,11 @@ pub(super) async fn insert_job(
         sqlx::query(
             "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at,
                                started_at, finished_at, rerun_of, sweep_id, sweep_index,
-                               sweep_label, sweep_values, scene_hash, cached_from, progress,
-                               summary)
+                               sweep_label, sweep_values, scene_hash, max_attempts, cached_from,
+                               progress, summary)
              SELECT ?, ?, 'completed', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'),
                     strftime('%Y-%m-%dT%H:%M:%fZ','now'), strftime('%Y-%m-%dT%H:%M:%fZ','now'),
-                    ?, ?, ?, ?, ?, ?, id, progress, summary
+                    ?, ?, ?, ?, ?, ?, ?, id, progress, summary
              FROM jobs WHERE id = ?
              RETURNING *",
         )
@@ -260,6 +272,7 @@ pub(super) async fn insert_job(
         .bind(sweep_label)
         .bind(sweep_values)
         .bind(&j.scene_hash)
+        .bind(j.max_attempts.map(i64::from))
         .bind(&src)
         .fetch_one(&mut *tx)
         .await?
@@ -267,9 +280,9 @@ pub(super) async fn insert_job(
         sqlx::query(
             "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at,
                                rerun_of, sweep_id, sweep_index, sweep_label, sweep_values,
-                               scene_hash)
+                               scene_hash, max_attempts)
              VALUES (?, ?, 'queued', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'),
-                     ?, ?, ?, ?, ?, ?)
+                     ?, ?, ?, ?, ?, ?, ?)
              RETURNING *",
         )
         .bind(&j.id)
@@ -284,6 +297,7 @@ pub(super) async fn insert_job(
         .bind(sweep_label)
         .bind(sweep_values)
         .bind(&j.scene_hash)
+        .bind(j.max_attempts.map(i64::from))
         .fetch_one(&mut *tx)
         .await?
     };

@@ -8,16 +8,16 @@ use fracture_api::results::{Progress, RunStatus, Summary};
 
 use super::{JobRow, Store, StoreError, col, delete_job_rows, now_ms, to_json};
 
-/// The release of a dead worker's jobs (`?1` max attempts, `?2` deterministic, `?3` the
+/// The release of a dead worker's jobs (`?1` max attempts unless the job has its own, `?2` deterministic, `?3` the
 /// cause); the caller adds the `WHERE` clause.
 const RELEASE: &str = "UPDATE jobs SET
     status = CASE WHEN cancel_requested != 0 THEN 'cancelled'
-                  WHEN ?2 OR attempts >= ?1 THEN 'failed' ELSE 'queued' END,
+                  WHEN ?2 OR attempts >= COALESCE(max_attempts, ?1) THEN 'failed' ELSE 'queued' END,
     message = CASE WHEN cancel_requested != 0 THEN 'cancelled (its worker died: ' || ?3 || ')'
                   WHEN ?2 THEN 'the worker running it died: ' || ?3
-                  WHEN attempts >= ?1 THEN 'the worker running it died (attempt ' || attempts || ' of ' || ?1 || '; giving up): ' || ?3
+                  WHEN attempts >= COALESCE(max_attempts, ?1) THEN 'the worker running it died (attempt ' || attempts || ' of ' || COALESCE(max_attempts, ?1) || '; giving up): ' || ?3
                   ELSE 're-queued: the worker running it died: ' || ?3 END,
-    finished_at = CASE WHEN cancel_requested != 0 OR ?2 OR attempts >= ?1
+    finished_at = CASE WHEN cancel_requested != 0 OR ?2 OR attempts >= COALESCE(max_attempts, ?1)
                        THEN strftime('%Y-%m-%dT%H:%M:%fZ','now') ELSE NULL END,
     worker_id = NULL, lease_until_ms = NULL";
 
@@ -159,11 +159,11 @@ impl Store {
         let rows = sqlx::query(
             "UPDATE jobs SET
                 status = CASE WHEN cancel_requested != 0 THEN 'cancelled'
-                              WHEN attempts >= ? THEN 'failed' ELSE 'queued' END,
+                              WHEN attempts >= COALESCE(max_attempts, ?) THEN 'failed' ELSE 'queued' END,
                 message = CASE WHEN cancel_requested != 0 THEN 'cancelled (its worker stopped answering)'
-                              WHEN attempts >= ? THEN 'the worker was lost ' || attempts || ' times (lease expired); giving up'
+                              WHEN attempts >= COALESCE(max_attempts, ?) THEN 'the worker was lost ' || attempts || ' times (lease expired); giving up'
                               ELSE 'the worker was lost (lease expired); re-queued' END,
-                finished_at = CASE WHEN cancel_requested != 0 OR attempts >= ?
+                finished_at = CASE WHEN cancel_requested != 0 OR attempts >= COALESCE(max_attempts, ?)
                                    THEN strftime('%Y-%m-%dT%H:%M:%fZ','now') ELSE NULL END,
                 worker_id = NULL, lease_until_ms = NULL
              WHERE status = 'running' AND lease_until_ms < ?
