@@ -331,22 +331,27 @@ impl Cracks {
             }
             (pts, tips, ext)
         };
+        // (crack, interface) pairs where a crack tip lies on an interface (within h/4): the
+        // tip hands its growth to the interface (§8), and the two share one pair of fields.
+        let mut joins: Vec<(usize, usize)> = Vec::new();
         let mut cracks: Vec<Crack> = scene
             .cracks
             .iter()
-            .map(|c| {
+            .enumerate()
+            .map(|(ci, c)| {
                 let (pts, mut tips, ext) = polyline(&c.points);
-                // A tip on an interface hands its growth to the interface (§8).
                 for (end, tip) in tips.iter_mut().enumerate() {
                     let x = if end == 0 {
                         pts[0].x
                     } else {
                         pts[pts.len() - 1].x
                     };
-                    tip.on_interface = scene
-                        .interfaces
-                        .iter()
-                        .any(|it| polyline_distance(&it.points, x) <= 0.25 * h);
+                    for (ii, it) in scene.interfaces.iter().enumerate() {
+                        if polyline_distance(&it.points, x) <= 0.25 * h {
+                            tip.on_interface = true;
+                            joins.push((ci, ii));
+                        }
+                    }
                 }
                 Crack {
                     pts,
@@ -357,13 +362,14 @@ impl Cracks {
                     ext,
                     interface: false,
                     fronts: Fronts::default(),
-                    group: 0,
+                    group: ci as u32,
                 }
             })
             .collect();
         // Interfaces: cracks from the start whose every point is bonded; their ends are not
         // tips (no J, no growth: the bond's failure is the growth).
-        for it in &scene.interfaces {
+        let n_cracks = scene.cracks.len();
+        for (ii, it) in scene.interfaces.iter().enumerate() {
             let (mut pts, mut tips, ext) = polyline(&it.points);
             for t in &mut tips {
                 t.active = false;
@@ -382,27 +388,12 @@ impl Cracks {
                 ext,
                 interface: true,
                 fronts: Fronts::default(),
-                group: 0,
+                group: (n_cracks + ii) as u32,
             });
         }
-        for (i, c) in cracks.iter_mut().enumerate() {
-            c.group = i as u32;
-        }
-        // An interface that a crack tip lies on continues that crack (the notch meets the
-        // bond): it joins the crack's group.
-        let n_cracks = scene.cracks.len();
-        for (ii, it) in scene.interfaces.iter().enumerate() {
-            for ci in 0..n_cracks {
-                let c = &cracks[ci];
-                let ends = [c.pts[0].x, c.pts[c.pts.len() - 1].x];
-                let joins = (0..2).any(|e| {
-                    c.tips[e].on_interface && polyline_distance(&it.points, ends[e]) <= 0.25 * h
-                });
-                if joins {
-                    let g = cracks[ci].group;
-                    cracks[n_cracks + ii].group = g;
-                }
-            }
+        // An interface that a crack tip lies on continues that crack: it joins its group.
+        for (ci, ii) in joins {
+            cracks[n_cracks + ii].group = cracks[ci].group;
         }
         Cracks {
             cracks,
