@@ -436,22 +436,22 @@ impl Cracks {
         let dtn = d[0] * tan[0] + d[1] * tan[1];
         let traction = bond.traction(dn, dtn);
         let area_dt = bond.share * self.thickness * dt;
-        // Impulse components (normal, tangential) on the above side, signed; None: rigid.
-        let want = match traction {
-            Some(t) if t == [0.0; 2] => None,
-            Some(t) => Some(Some([-t[0] * area_dt, -t[1] * area_dt])),
-            None => Some(None),
-        };
-        if let (Some(want), true) = (want, area_dt > 0.0) {
+        // None: rigid (the undamaged linear law); a zero traction (failed, or closed after
+        // damage) applies nothing.
+        if area_dt > 0.0 && traction != Some([0.0; 2]) {
             let caps = [bond.strength[0] * area_dt, bond.strength[1] * area_dt];
             let applied = self.push_pairs(geom, nodes, f1, slot_of, pt.x, nrm, dt, |wf, stick| {
                 let s = [
                     stick[0] * up[0] + stick[1] * up[1],
                     stick[0] * tan[0] + stick[1] * tan[1],
                 ];
-                // Rigid (undamaged linear law): whatever keeps the fields together, up to
-                // the strengths (the normal part only in tension).
-                let want = want.unwrap_or([-caps[0], s[1].signum() * caps[1]]);
+                // Impulse components (normal, tangential) on the above side, signed. Rigid:
+                // whatever keeps the fields together, up to the strengths (the normal part
+                // only in tension).
+                let want = match traction {
+                    Some(t) => [-t[0] * area_dt, -t[1] * area_dt],
+                    None => [-caps[0], s[1].signum() * caps[1]],
+                };
                 let mut j = [0.0; 2];
                 for q in 0..2 {
                     let wq = want[q] * wf;
@@ -464,7 +464,7 @@ impl Cracks {
             });
             // A rigid bond is a constraint: it does no work (the surfaces' drift under it is
             // not an opening), so nothing is booked for it.
-            if let (Some(a), Some(_)) = (applied, want) {
+            if let (Some(a), Some(_)) = (applied, traction) {
                 bond.last = Some((a, d));
             }
         }
