@@ -14,6 +14,7 @@
 //!
 //! The `fields.mcap` format itself lives in [`fracture_results::mcapfile`].
 
+pub mod handback;
 pub mod local;
 pub mod provenance;
 pub mod remote;
