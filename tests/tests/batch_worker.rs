@@ -71,7 +71,7 @@ fn a_batch_worker_exits_after_max_jobs_and_when_idle() {
         "exited {idle:?} after its last job (--idle-exit 2); {log}"
     );
     assert!(log.contains("--idle-exit"), "{log}");
-    println!(
+    eprintln!(
         "idle exit {:.1} s after the last job ({:.1} s in all)",
         idle.as_secs_f64(),
         t0.elapsed().as_secs_f64()
@@ -148,7 +148,7 @@ fn a_stop_signal_hands_the_running_job_back_and_another_worker_completes_it() {
     // CHECKPOINT (helper ckpt's merge): assert here that the second run resumed from the
     // checkpoint written at the hand-back (its first step after `stopped_at`), instead of
     // step 0 as today.
-    println!(
+    eprintln!(
         "handed back {:.2} s after SIGTERM at step {stopped_at}; completed by another \
          worker ({rows} energy rows)",
         released.as_secs_f64()

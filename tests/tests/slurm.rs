@@ -387,7 +387,7 @@ fn a_slurm_job_array_drains_the_queue_and_a_signalled_worker_hands_its_job_back(
             if std::env::var("FRACTURE_REQUIRE_SLURM").is_ok_and(|v| v == "1") {
                 panic!("the Slurm test cluster cannot run here: {why}");
             }
-            println!("SKIPPED: the Slurm test cluster cannot run here: {why}");
+            eprintln!("SKIPPED: the Slurm test cluster cannot run here: {why}");
             return;
         }
     };
@@ -459,13 +459,13 @@ fn a_slurm_job_array_drains_the_queue_and_a_signalled_worker_hands_its_job_back(
         "the jobs were not spread over the array's workers: {timeline:?}"
     );
     timeline.sort();
-    println!(
+    eprintln!(
         "{} jobs drained by array {array} in {:.1} s:",
         jobs.len(),
         drained.as_secs_f64()
     );
     for (start, end, name, by, host) in &timeline {
-        println!("  {name}: {start} .. {end}  {by} on {host}");
+        eprintln!("  {name}: {start} .. {end}  {by} on {host}");
     }
 
     // 2. A worker warned by Slurm mid-job hands the job back; another array completes it.
@@ -525,7 +525,7 @@ fn a_slurm_job_array_drains_the_queue_and_a_signalled_worker_hands_its_job_back(
     // checkpoint written at the hand-back (its run starts after `stopped_at`), instead of
     // from step 0 as today.
     cluster.wait_gone(&second, Duration::from_secs(60));
-    println!(
+    eprintln!(
         "{}: handed back by array {first} task 0 at step {stopped_at}, {:.2} s after \
          SIGUSR1; completed by array {a} task {t} (slurm job {job}) on {host}, attempt 1, \
          {rows} energy rows; {:.1} s in all",
