@@ -469,7 +469,8 @@ fn a_slurm_job_array_drains_the_queue_and_a_signalled_worker_hands_its_job_back(
     }
 
     // 2. A worker warned by Slurm mid-job hands the job back; another array completes it.
-    let long = s.submit(&scene("slurm-handback", 40, 20, 6000, 0));
+    // Long enough (seconds) to be signalled between two progress reports (0.5 s apart).
+    let long = s.submit(&scene("slurm-handback", 40, 20, 10000, 0));
     let first = cluster.submit_workers(
         &s,
         "0",
