@@ -352,6 +352,11 @@ pub struct Provenance {
     pub started_at: String,
     /// When it ended (RFC 3339 UTC, as the summary was written).
     pub finished_at: String,
+    /// The batch scheduler's job that ran it, when it ran under one: `slurm job 1234
+    /// (array 1230 task 4)`, `kubernetes job fracture-worker index 2 (pod …)`. Absent
+    /// otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scheduler: Option<String>,
 }
 
 /// Fracture energy of the growing tips of a run (J per the scene's thickness × thickness, as

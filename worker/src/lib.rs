@@ -11,9 +11,12 @@
 //!   obeys cancellation and streams the results ([`remote::run_worker`]).
 //! * [`supervise`] runs the remote worker loop in a child process and reports the child's
 //!   death (signal, exit status, last lines of stderr) for the job it held.
+//! * [`batch`]: workers of a batch scheduler (Slurm, Kubernetes): stop signals that hand the
+//!   running job back ([`handback`]), idle and job-count limits.
 //!
 //! The `fields.mcap` format itself lives in [`fracture_results::mcapfile`].
 
+pub mod batch;
 pub mod handback;
 pub mod local;
 pub mod provenance;
@@ -35,6 +38,13 @@ pub enum Control {
     Continue,
     /// Stop now; the run ends with status `cancelled`.
     Cancel,
+    /// Stop now to hand the job back to the queue (a batch worker told to stop,
+    /// [`handback`]): the rows sampled so far are flushed, but there is no final sample, no
+    /// last progress report and no [`RunSink::finish`]; the returned summary says
+    /// `cancelled` with the message `handed back at step N` and is not a result. The caller
+    /// hands the job back after [`run_scene`] returns (so a checkpoint written as the loop
+    /// stops comes first).
+    HandBack,
 }
 
 /// A sink could not take the results (IO error, server gone, lease lost, …). The run ends
@@ -53,7 +63,8 @@ impl From<std::io::Error> for SinkError {
 /// produced (rows in batches), `progress` about every [`RunOptions::flush_every`] of wall
 /// time (rows sampled so far are flushed just before it), a last `progress`, then `finish`.
 pub trait RunSink {
-    /// Progress report; return [`Control::Cancel`] to stop the run. Called about every
+    /// Progress report; return [`Control::Cancel`] to stop the run ([`Control::HandBack`]:
+    /// stop it unfinished). Called about every
     /// [`RunOptions::flush_every`] of wall time and once at the end (where the answer is
     /// ignored).
     fn progress(&mut self, p: &Progress) -> Result<Control, SinkError>;
@@ -63,7 +74,8 @@ pub trait RunSink {
     fn crack_tips(&mut self, rows: &[CrackTipRow]) -> Result<(), SinkError>;
     /// One field snapshot.
     fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError>;
-    /// The run is over; called exactly once, also after failures and cancellation.
+    /// The run is over; called exactly once, also after failures and cancellation (not
+    /// after [`Control::HandBack`]: the run is not over).
     fn finish(&mut self, summary: &Summary) -> Result<(), SinkError>;
 }
 

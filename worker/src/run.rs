@@ -177,6 +177,7 @@ pub(crate) fn panic_message(p: &(dyn Any + Send)) -> String {
 /// Why the loop stopped early.
 enum Stop {
     Cancelled,
+    HandedBack,
     Step(StepError),
     Panic(String),
     Sink(SinkError),
@@ -360,14 +361,20 @@ pub(crate) fn run_model<M: Model>(
                 last_report = Instant::now();
                 lp.flush().map_err(Stop::Sink)?;
                 let p = lp.progress();
-                if lp.sink.progress(&p).map_err(Stop::Sink)? == Control::Cancel {
-                    return Err(Stop::Cancelled);
+                match lp.sink.progress(&p).map_err(Stop::Sink)? {
+                    Control::Continue => {}
+                    Control::Cancel => return Err(Stop::Cancelled),
+                    // The job goes back to the queue unfinished. Checkpoint: a checkpoint of
+                    // the state at this step is written here, before the loop returns (the
+                    // caller releases the job after `run_scene` returns).
+                    Control::HandBack => return Err(Stop::HandedBack),
                 }
             }
         }
         Ok(())
     })();
     let wall = start.elapsed().as_secs_f64();
+    let handed_back = matches!(result, Err(Stop::HandedBack));
 
     // One final sample where the last step was not sampled (also after a failure: the
     // state that failed is the diagnosis). Not after a panic or a sink error.
@@ -406,6 +413,10 @@ pub(crate) fn run_model<M: Model>(
             RunStatus::Cancelled,
             Some("cancelled on request".to_string()),
         ),
+        Err(Stop::HandedBack) => (
+            RunStatus::Cancelled,
+            Some(format!("handed back at step {}", summary.steps)),
+        ),
         Err(Stop::Step(e)) => {
             summary.failure = Some(FailureKind::Numerical);
             (RunStatus::Failed, Some(e.to_string()))
@@ -429,6 +440,11 @@ pub(crate) fn run_model<M: Model>(
     {
         summary.status = RunStatus::Failed;
         summary.message = Some(m);
+    }
+    if handed_back {
+        // Not over: no last progress report and no finish (`Control::HandBack`).
+        stamp_finish(&mut summary);
+        return summary;
     }
     if !sink_broken {
         // The run is over: a late Cancel changes nothing.
@@ -721,6 +737,46 @@ mod tests {
         assert_eq!(sink.finished[0].status, RunStatus::Cancelled);
         // Rows up to the cancellation are all delivered.
         assert_eq!(sink.energy.last().unwrap().kinetic, 3.0);
+    }
+
+    #[test]
+    fn hand_back_stops_without_final_sample_progress_or_finish() {
+        struct HandBackAt(Record, usize);
+        impl RunSink for HandBackAt {
+            fn progress(&mut self, p: &Progress) -> Result<Control, SinkError> {
+                self.0.progress(p)?;
+                Ok(if self.0.progress.len() > self.1 {
+                    Control::HandBack
+                } else {
+                    Control::Continue
+                })
+            }
+            fn energy(&mut self, rows: &[EnergyRow]) -> Result<(), SinkError> {
+                self.0.energy(rows)
+            }
+            fn crack_tips(&mut self, rows: &[CrackTipRow]) -> Result<(), SinkError> {
+                self.0.crack_tips(rows)
+            }
+            fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError> {
+                self.0.snapshot(snap)
+            }
+            fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
+                self.0.finish(summary)
+            }
+        }
+        let mut m = Fake::new(1000, 0.1);
+        let mut sink = HandBackAt(Record::default(), 2);
+        let s = run_model(&mut m, &scene(None, 0.0), &opts(0), &mut sink);
+        assert_eq!(s.status, RunStatus::Cancelled);
+        assert_eq!(s.steps, 3);
+        assert_eq!(s.message.as_deref(), Some("handed back at step 3"));
+        let r = &sink.0;
+        assert!(r.finished.is_empty(), "no finish after a hand-back");
+        assert_eq!(r.progress.len(), 3, "no last progress report");
+        // Rows up to the hand-back are delivered, and no extra final sample.
+        let ks: Vec<u64> = r.energy.iter().map(|e| e.kinetic as u64).collect();
+        assert_eq!(ks, vec![0, 1, 2, 3]);
+        assert_eq!(r.log.last(), Some(&"progress"));
     }
 
     #[test]

@@ -117,6 +117,7 @@ pub fn app(state: AppState) -> Router {
         .routes(routes!(worker::worker_snapshot))
         .routes(routes!(worker::worker_finish))
         .routes(routes!(worker::worker_died))
+        .routes(routes!(worker::worker_release))
         .layer(DefaultBodyLimit::max(limits.max_worker_body_bytes))
         .layer(Extension(BodyLimit(limits.max_worker_body_bytes)));
     let (router, api) = public.merge(worker).split_for_parts();
