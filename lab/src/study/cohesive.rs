@@ -207,7 +207,10 @@ pub(super) fn cohesive_doc(
     } else {
         json!({"law": "frictionless"})
     };
-    set_path(&mut doc, "interfaces.0.contact", contact)?;
+    // The notch and the bond are one line with one pair of fields, and at their shared nodes
+    // the crack's contact law applies (`docs/scene-extensions.md`): both get the friction.
+    set_path(&mut doc, "interfaces.0.contact", contact.clone())?;
+    set_path(&mut doc, "cracks.0.contact", contact)?;
     if let Some(h) = b.h {
         set_path(&mut doc, "grid.cell_size", json!(h))?;
         let y_min = doc
@@ -870,7 +873,8 @@ mod tests {
                 let c = &doc["interfaces"][0]["cohesive"];
                 assert_eq!(c["shear"]["toughness"].as_f64(), Some(b.g));
                 assert_eq!(c["normal"]["strength"].as_f64(), Some(b.tau));
-                let law = doc["interfaces"][0]["contact"]["law"].as_str();
+                let law = doc["cracks"][0]["contact"]["law"].as_str();
+                assert_eq!(law, doc["interfaces"][0]["contact"]["law"].as_str());
                 assert_eq!(
                     law,
                     Some(if b.mu > 0.0 {
