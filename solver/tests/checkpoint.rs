@@ -143,13 +143,21 @@ fn assert_resume_identical(name: &str, s: &Scene, k: u64) {
         assert!(!a.is_empty(), "{name}: nothing after the checkpoint");
         for (i, (x, y)) in a.iter().zip(&b).enumerate() {
             let step = k + 1 + i as u64;
-            assert!(
-                x.0 == y.0,
-                "{name}, {threads} threads: step {step} differs after a restore at step {k}:\n\
-                 uninterrupted {}\nrestored      {}",
-                x.0,
-                y.0
-            );
+            if let Some((u, r)) = x.0.lines().zip(y.0.lines()).find(|(u, r)| u != r) {
+                let at = u
+                    .bytes()
+                    .zip(r.bytes())
+                    .position(|(a, b)| a != b)
+                    .unwrap_or(0);
+                let from = at.saturating_sub(200);
+                panic!(
+                    "{name}, {threads} threads: step {step} differs after a restore at step {k}:\n\
+                     uninterrupted …{}\nrestored      …{}",
+                    &u[from..(at + 100).min(u.len())],
+                    &r[from..(at + 100).min(r.len())]
+                );
+            }
+            assert_eq!(x.0, y.0, "{name}: step {step}");
             if let Some(w) = x.1.iter().zip(&y.1).position(|(p, q)| p != q) {
                 panic!("{name}, {threads} threads: step {step}: particle word {w} differs");
             }
