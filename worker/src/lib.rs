@@ -9,11 +9,15 @@
 //! * [`LocalOutput`] is the sink of `fracture run`: the files of `run-output.md`.
 //! * [`remote`] is the remote worker: claims jobs from a server over HTTP, heartbeats,
 //!   obeys cancellation and streams the results ([`remote::run_worker`]).
+//! * [`checkpoint`]: a remote job writes checkpoints every N steps or M minutes and when
+//!   it is asked to hand its job back ([`handback`]); a re-claimed job resumes from the
+//!   last one ([`run_job`]).
 //! * [`supervise`] runs the remote worker loop in a child process and reports the child's
 //!   death (signal, exit status, last lines of stderr) for the job it held.
 //!
 //! The `fields.mcap` format itself lives in [`fracture_results::mcapfile`].
 
+pub mod checkpoint;
 pub mod handback;
 pub mod local;
 pub mod provenance;
@@ -21,8 +25,9 @@ pub mod remote;
 mod run;
 pub mod supervise;
 
+pub use checkpoint::{CheckpointAt, CheckpointPolicy};
 pub use local::{LocalOutput, LocalOutputError};
-pub use run::run_scene;
+pub use run::{run_job, run_scene};
 
 use std::time::Duration;
 
@@ -63,8 +68,22 @@ pub trait RunSink {
     fn crack_tips(&mut self, rows: &[CrackTipRow]) -> Result<(), SinkError>;
     /// One field snapshot.
     fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError>;
-    /// The run is over; called exactly once, also after failures and cancellation.
+    /// The run is over; called exactly once, also after failures and cancellation (not
+    /// after a hand back).
     fn finish(&mut self, summary: &Summary) -> Result<(), SinkError>;
+    /// A checkpoint of the run ([`checkpoint`]), taken after every row sampled at or before
+    /// `at.time` was given to the sink. A sink that keeps none ignores it. An error is
+    /// logged and the run goes on (the previous checkpoint stays the one to resume from).
+    fn checkpoint(&mut self, bytes: &[u8], at: &CheckpointAt) -> Result<(), SinkError> {
+        let _ = (bytes, at);
+        Ok(())
+    }
+    /// The run stopped to be handed back ([`handback`]) after its last checkpoint: give the
+    /// job back to whoever resumes it; `finish` is not called.
+    fn hand_back(&mut self, p: &Progress) -> Result<(), SinkError> {
+        let _ = p;
+        Err(SinkError("this sink cannot hand a run back".into()))
+    }
 }
 
 /// How a run is driven (not physics).
@@ -101,5 +120,11 @@ impl<S: RunSink + ?Sized> RunSink for &mut S {
     }
     fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
         (**self).finish(summary)
+    }
+    fn checkpoint(&mut self, bytes: &[u8], at: &CheckpointAt) -> Result<(), SinkError> {
+        (**self).checkpoint(bytes, at)
+    }
+    fn hand_back(&mut self, p: &Progress) -> Result<(), SinkError> {
+        (**self).hand_back(p)
     }
 }

@@ -31,6 +31,7 @@ use reqwest::blocking::{Client, Response};
 
 use fracture_api::protocol::{
     Claim, ClaimRequest, CrackTipBatch, EnergyBatch, FinishRequest, Heartbeat, HeartbeatReply,
+    WorkerDied,
 };
 use fracture_results::codec;
 
@@ -76,6 +77,8 @@ pub struct WorkerConfig {
     /// Tell a supervising parent on stdout which claim this process holds
     /// ([`crate::supervise`]): `HOLDS <job> <fence>` after a claim, `IDLE` when it ends.
     pub announce_claims: bool,
+    /// When a running job is checkpointed (`docs/service.md`, "Checkpoints").
+    pub checkpoints: crate::CheckpointPolicy,
 }
 
 /// How long uploads are retried while the server answers 507 (its disk is full).
@@ -126,6 +129,47 @@ impl Api {
                 .json(body)
                 .send(),
         )
+    }
+
+    fn put_bytes(&self, path: &str, body: Vec<u8>) -> Result<Response, ClientError> {
+        Self::check(
+            self.http
+                .put(self.url(path))
+                .bearer_auth(&self.token)
+                .header(reqwest::header::CONTENT_TYPE, "application/octet-stream")
+                .body(body)
+                .send(),
+        )
+    }
+
+    /// The job's checkpoint (None: it has none).
+    fn get_checkpoint(&self, job: &str, fence: i64) -> Result<Option<Vec<u8>>, ClientError> {
+        let r = self
+            .http
+            .get(self.url(&format!("jobs/{job}/checkpoint?fence={fence}")))
+            .bearer_auth(&self.token)
+            .send();
+        if let Ok(resp) = &r
+            && resp.status() == StatusCode::NOT_FOUND
+        {
+            return Ok(None);
+        }
+        let bytes = Self::check(r)?
+            .bytes()
+            .map_err(|e| ClientError::Transient(e.to_string()))?;
+        Ok(Some(bytes.to_vec()))
+    }
+
+    /// Refuse the job's checkpoint: the server drops it and the history after step 0, and
+    /// the run starts over.
+    fn refuse_checkpoint(&self, job: &str, fence: i64) -> Result<(), ClientError> {
+        Self::check(
+            self.http
+                .delete(self.url(&format!("jobs/{job}/checkpoint?fence={fence}")))
+                .bearer_auth(&self.token)
+                .send(),
+        )
+        .map(drop)
     }
 
     fn post_bytes(&self, path: &str, body: Vec<u8>) -> Result<Response, ClientError> {
@@ -204,6 +248,10 @@ pub fn run_worker(cfg: WorkerConfig) -> anyhow::Result<()> {
                     }
                 };
                 run_claim(&api, &cfg, claim);
+                if crate::handback::requested() {
+                    tracing::info!("job handed back; worker stops");
+                    return Ok(());
+                }
             }
             Err(ClientError::Unauthorized(m)) => {
                 anyhow::bail!("the server refused the worker token: {m}")
@@ -303,6 +351,7 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
         cancel: cancel.clone(),
         lost: lost.clone(),
         finished: false,
+        handed_back: false,
     };
     // The server validated the scene before queueing it; a worker of another version may
     // still disagree, so it validates once more here (the only way to a `ValidScene`).
@@ -328,7 +377,7 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
                             threads: cfg.threads,
                             flush_every: cfg.flush_every,
                         };
-                        crate::run_scene(&valid, &opts, &mut sink)
+                        run_resumable(api, cfg, &job, fence, &valid, &opts, &mut sink)
                     }
                 }
             }
@@ -344,7 +393,7 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
             format!("the claimed scene could not be read: {e}"),
         ),
     };
-    if !sink.finished && !lost.load(Ordering::SeqCst) {
+    if !sink.finished && !sink.handed_back && !lost.load(Ordering::SeqCst) {
         let _ = sink.finish(&summary);
     }
     let _ = stop_tx.send(());
@@ -353,6 +402,58 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
         crate::supervise::announce(None);
     }
     tracing::info!(job = %job, status = ?summary.status, "run ended");
+}
+
+/// Run a claimed job, from its checkpoint when the server has one this build can use; a
+/// checkpoint it refuses is dropped on the server (with the history after step 0) and the
+/// run starts over.
+fn run_resumable(
+    api: &Api,
+    cfg: &WorkerConfig,
+    job: &str,
+    fence: i64,
+    valid: &ValidScene,
+    opts: &RunOptions,
+    sink: &mut HttpSink<'_>,
+) -> Summary {
+    let policy = cfg.checkpoints;
+    let fetched = api.retry(HttpSink::BUDGET, || api.get_checkpoint(job, fence));
+    let bytes = match fetched {
+        Ok(b) => b,
+        Err(e) => {
+            // Without it the run cannot start at the history the server kept.
+            tracing::warn!(job = %job, error = %e, "cannot fetch the checkpoint");
+            if api.refuse_checkpoint(job, fence).is_err() {
+                return failed_summary(
+                    Some(valid.scene()),
+                    FailureKind::Output,
+                    format!("could not fetch or drop the job's checkpoint: {e}"),
+                );
+            }
+            None
+        }
+    };
+    if let Some(b) = bytes {
+        match crate::run_job(valid, opts, policy, Some(&b), sink) {
+            Ok(s) => return s,
+            Err(why) => {
+                tracing::warn!(job = %job, reason = %why, "checkpoint refused; starting over from step 0");
+                if let Err(e) = api.retry(HttpSink::BUDGET, || api.refuse_checkpoint(job, fence)) {
+                    return failed_summary(
+                        Some(valid.scene()),
+                        FailureKind::Output,
+                        format!(
+                            "the job's checkpoint was refused ({why}) and could not be dropped: {e}"
+                        ),
+                    );
+                }
+            }
+        }
+    }
+    match crate::run_job(valid, opts, policy, None, sink) {
+        Ok(s) => s,
+        Err(e) => failed_summary(Some(valid.scene()), FailureKind::Output, e),
+    }
 }
 
 /// The address-space cap of a running job (`RLIMIT_AS`, soft limit), lifted when dropped.
@@ -438,6 +539,7 @@ struct HttpSink<'a> {
     cancel: Arc<AtomicBool>,
     lost: Arc<AtomicBool>,
     finished: bool,
+    handed_back: bool,
 }
 
 impl HttpSink<'_> {
@@ -524,6 +626,39 @@ impl RunSink for HttpSink<'_> {
             .retry(Self::BUDGET, || {
                 self.api.post_bytes(&path, body.clone()).map(drop)
             })
+            .map_err(|e| self.fail(e))
+    }
+
+    fn checkpoint(&mut self, bytes: &[u8], at: &crate::CheckpointAt) -> Result<(), SinkError> {
+        self.guard()?;
+        // Rust's `{}` of an f64 is its shortest round-trip text: the server reads the
+        // same bits.
+        let path = format!(
+            "jobs/{}/checkpoint?fence={}&step={}&time={}&snapshots={}",
+            self.job, self.fence, at.step, at.time, at.snapshots
+        );
+        self.api
+            .retry(Self::BUDGET, || {
+                self.api.put_bytes(&path, bytes.to_vec()).map(drop)
+            })
+            .map_err(|e| self.fail(e))
+    }
+
+    fn hand_back(&mut self, p: &Progress) -> Result<(), SinkError> {
+        self.guard()?;
+        self.handed_back = true;
+        // Released by the rules of a worker's death (re-queued at once): the next claim
+        // resumes from the checkpoint just written.
+        let d = WorkerDied {
+            fence: self.fence,
+            cause: format!(
+                "handed back by its worker at step {} (resumes from its checkpoint)",
+                p.step
+            ),
+        };
+        let path = format!("jobs/{}/died", self.job);
+        self.api
+            .retry(Self::BUDGET, || self.api.post_json(&path, &d).map(drop))
             .map_err(|e| self.fail(e))
     }
 

@@ -14,6 +14,7 @@ use fracture_api::scene::FieldKind;
 use fracture_api::{Scene, ValidScene};
 use fracture_solver::{Simulation, SolverConfig, StepError, StepStats};
 
+use crate::checkpoint::{CheckpointAt, CheckpointPolicy, LoopCursor};
 use crate::{Control, RunOptions, RunSink, SinkError};
 
 /// What the run loop needs from a simulation. Implemented by
@@ -34,6 +35,10 @@ pub(crate) trait Model {
     fn snapshot(&self, index: u32, fields: &[FieldKind]) -> Snapshot;
     /// The fracture-energy report of growing tips (None without growth).
     fn fracture_energy(&self) -> Option<FractureEnergy> {
+        None
+    }
+    /// The solver's checkpoint (None: this model keeps none).
+    fn checkpoint(&self) -> Option<Vec<u8>> {
         None
     }
 }
@@ -78,6 +83,9 @@ impl Model for Simulation {
     fn fracture_energy(&self) -> Option<FractureEnergy> {
         Simulation::fracture_energy(self)
     }
+    fn checkpoint(&self) -> Option<Vec<u8>> {
+        Some(Simulation::checkpoint(self))
+    }
 }
 
 /// Run a scene to its end time, sending results to `sink`, and return the summary (also
@@ -100,7 +108,7 @@ pub fn run_scene(scene: &ValidScene, opts: &RunOptions, sink: &mut dyn RunSink) 
     };
     let built = catch_unwind(AssertUnwindSafe(|| Simulation::new(scene, config)));
     match built {
-        Ok(Ok(mut sim)) => run_model(&mut sim, scene, opts, sink),
+        Ok(Ok(mut sim)) => run_model(&mut sim, scene, opts, CheckpointPolicy::none(), None, sink),
         Ok(Err(e)) => finish_early(
             scene,
             sink,
@@ -117,6 +125,50 @@ pub fn run_scene(scene: &ValidScene, opts: &RunOptions, sink: &mut dyn RunSink) 
             ),
         ),
     }
+}
+
+/// Run a job: like [`run_scene`], writing checkpoints by `policy` (and when a hand back is
+/// requested, [`crate::handback`], after which the run stops and is handed back), and
+/// resuming from `checkpoint` when one is given. A checkpoint that cannot be used (corrupt,
+/// of another scene or build) is refused before anything is sent: `Err` with the reason, and
+/// the caller starts over from step 0.
+pub fn run_job(
+    scene: &ValidScene,
+    opts: &RunOptions,
+    policy: CheckpointPolicy,
+    checkpoint: Option<&[u8]>,
+    sink: &mut dyn RunSink,
+) -> Result<Summary, String> {
+    let Some(bytes) = checkpoint else {
+        let config = SolverConfig {
+            threads: opts.threads,
+        };
+        let built = catch_unwind(AssertUnwindSafe(|| Simulation::new(scene, config)));
+        return Ok(match built {
+            Ok(Ok(mut sim)) => run_model(&mut sim, scene, opts, policy, None, sink),
+            _ => run_scene(scene, opts, sink),
+        });
+    };
+    let d = crate::checkpoint::decode(bytes, &scene.scene().hash())?;
+    let config = SolverConfig {
+        threads: opts.threads,
+    };
+    let mut sim = catch_unwind(AssertUnwindSafe(|| {
+        Simulation::restore(scene, config, &d.solver)
+    }))
+    .map_err(|p| format!("solver panicked restoring it: {}", panic_message(&*p)))?
+    .map_err(|e| e.to_string())?;
+    if sim.steps_taken() != d.at.step || sim.time().to_bits() != d.at.time.to_bits() {
+        return Err("the solver state is not at the checkpoint's step".into());
+    }
+    Ok(run_model(
+        &mut sim,
+        scene,
+        opts,
+        policy,
+        Some(d.cursor),
+        sink,
+    ))
 }
 
 fn base_summary(scene: &Scene) -> Summary {
@@ -180,6 +232,8 @@ enum Stop {
     Step(StepError),
     Panic(String),
     Sink(SinkError),
+    /// Checkpointed and handed back ([`crate::handback`]).
+    HandBack,
 }
 
 /// Sampling cadence: sample k is due at k·interval (k = 0, 1, …); `None` interval = every
@@ -274,6 +328,41 @@ impl<M: Model> Loop<'_, M> {
         Ok(())
     }
 
+    /// Write a checkpoint now: flush the rows sampled so far (the checkpoint covers them),
+    /// take the solver's checkpoint, hand it to the sink. A checkpoint that cannot be taken
+    /// or stored is logged and the run goes on; only a sink error on the flush stops it.
+    fn checkpoint_now(&mut self, scene_hash: &str, cursor: LoopCursor) -> Result<(), Stop> {
+        self.flush().map_err(Stop::Sink)?;
+        let model = &*self.model;
+        let Ok(Some(solver)) = catch_unwind(AssertUnwindSafe(|| model.checkpoint())) else {
+            tracing::warn!("the solver gave no checkpoint");
+            return Ok(());
+        };
+        let at = CheckpointAt {
+            step: model.steps_taken(),
+            time: model.time(),
+            snapshots: self.snapshots,
+        };
+        let t0 = Instant::now();
+        match crate::checkpoint::encode(scene_hash, at.step, at.time, cursor, solver) {
+            Ok(bytes) => {
+                let encoded = t0.elapsed();
+                match self.sink.checkpoint(&bytes, &at) {
+                    Ok(()) => tracing::info!(
+                        step = at.step,
+                        bytes = bytes.len(),
+                        encode_ms = encoded.as_secs_f64() * 1e3,
+                        total_ms = t0.elapsed().as_secs_f64() * 1e3,
+                        "checkpoint written"
+                    ),
+                    Err(e) => tracing::warn!(step = at.step, error = %e, "checkpoint not stored"),
+                }
+            }
+            Err(e) => tracing::warn!(error = %e, "checkpoint not encoded"),
+        }
+        Ok(())
+    }
+
     fn progress(&self) -> Progress {
         let t = self.model.time();
         let end = self.model.end_time();
@@ -298,6 +387,8 @@ pub(crate) fn run_model<M: Model>(
     model: &mut M,
     scene: &Scene,
     opts: &RunOptions,
+    policy: CheckpointPolicy,
+    resume: Option<LoopCursor>,
     sink: &mut dyn RunSink,
 ) -> Summary {
     let mut summary = base_summary(scene);
@@ -325,14 +416,28 @@ pub(crate) fn run_model<M: Model>(
     let mut last_report = start;
     let mut active_sum = 0.0_f64;
     let mut active_steps = 0u64;
+    let mut wall_before = 0.0_f64;
+    if let Some(c) = resume {
+        history.next = c.history_next;
+        snapshots.next = c.snapshot_next;
+        lp.snapshots = c.snapshots;
+        lp.sampled_at = c.sampled_at;
+        active_sum = c.active_sum;
+        active_steps = c.active_steps;
+        wall_before = c.wall_seconds;
+    }
+    let hash = scene.hash();
+    let mut last_checkpoint = (lp.model.steps_taken(), start);
 
     let result: Result<(), Stop> = (|| {
         let dt = lp.model.time_step();
-        // t = 0.
-        lp.sample()?;
-        history.due(lp.model.time(), dt);
-        if snapshot_interval.is_some() && snapshots.due(lp.model.time(), dt) {
-            lp.snapshot()?;
+        // t = 0 (a resumed run sampled it before).
+        if resume.is_none() {
+            lp.sample()?;
+            history.due(lp.model.time(), dt);
+            if snapshot_interval.is_some() && snapshots.due(lp.model.time(), dt) {
+                lp.snapshot()?;
+            }
         }
         while !lp.model.is_finished() {
             let model = &mut *lp.model;
@@ -350,11 +455,33 @@ pub(crate) fn run_model<M: Model>(
             active_sum += stats.active_nodes as f64;
             active_steps += 1;
             let t = lp.model.time();
-            if history.due(t, dt) {
+            let sampled = history.due(t, dt);
+            if sampled {
                 lp.sample()?;
             }
             if snapshot_interval.is_some() && snapshots.due(t, dt) {
                 lp.snapshot()?;
+            }
+            // Checkpoints: by the policy at a history sample, and at once on a hand back.
+            let hand_back = policy.enabled() && crate::handback::requested();
+            let steps = lp.model.steps_taken();
+            if hand_back
+                || (sampled && policy.due(steps - last_checkpoint.0, last_checkpoint.1.elapsed()))
+            {
+                let cursor = LoopCursor {
+                    history_next: history.next,
+                    snapshot_next: snapshots.next,
+                    snapshots: lp.snapshots,
+                    sampled_at: lp.sampled_at,
+                    active_sum,
+                    active_steps,
+                    wall_seconds: wall_before + start.elapsed().as_secs_f64(),
+                };
+                lp.checkpoint_now(&hash, cursor)?;
+                last_checkpoint = (steps, Instant::now());
+                if hand_back {
+                    return Err(Stop::HandBack);
+                }
             }
             if last_report.elapsed() >= opts.flush_every {
                 last_report = Instant::now();
@@ -367,7 +494,19 @@ pub(crate) fn run_model<M: Model>(
         }
         Ok(())
     })();
-    let wall = start.elapsed().as_secs_f64();
+    let wall = wall_before + start.elapsed().as_secs_f64();
+    if matches!(result, Err(Stop::HandBack)) {
+        // Everything up to the checkpoint is sent; the job goes back to the queue.
+        summary.status = RunStatus::Cancelled;
+        summary.steps = lp.model.steps_taken();
+        summary.sim_time = lp.model.time();
+        summary.wall_seconds = wall;
+        summary.message = Some(match lp.sink.hand_back(&lp.progress()) {
+            Ok(()) => format!("handed back at step {}", summary.steps),
+            Err(e) => format!("could not hand the job back at step {}: {e}", summary.steps),
+        });
+        return summary;
+    }
 
     // One final sample where the last step was not sampled (also after a failure: the
     // state that failed is the diagnosis). Not after a panic or a sink error.
@@ -414,6 +553,7 @@ pub(crate) fn run_model<M: Model>(
             summary.failure = Some(FailureKind::Panic);
             (RunStatus::Failed, Some(m))
         }
+        Err(Stop::HandBack) => (RunStatus::Cancelled, Some("handed back".to_string())),
         Err(Stop::Sink(e)) => {
             summary.failure = Some(FailureKind::Output);
             (
@@ -635,7 +775,14 @@ mod tests {
         // 10 (1.0); snapshots every 0.5 → steps 0, 5, 10.
         let mut m = Fake::new(10, 0.1);
         let mut sink = Record::default();
-        let s = run_model(&mut m, &scene(Some(0.25), 0.5), &opts(0), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(Some(0.25), 0.5),
+            &opts(0),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Completed, "{s:?}");
         assert_eq!(s.message, None);
         let times: Vec<u64> = sink.energy.iter().map(|e| e.kinetic as u64).collect();
@@ -675,7 +822,14 @@ mod tests {
     fn every_step_without_history_interval_and_no_snapshots_at_zero() {
         let mut m = Fake::new(7, 0.1);
         let mut sink = Record::default();
-        let s = run_model(&mut m, &scene(None, 0.0), &opts(3_600_000), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(None, 0.0),
+            &opts(3_600_000),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Completed);
         assert_eq!(sink.energy.len(), 8, "t = 0 and each of 7 steps");
         assert!(sink.snapshots.is_empty());
@@ -688,7 +842,14 @@ mod tests {
     fn rows_are_flushed_before_each_progress_report() {
         let mut m = Fake::new(20, 0.1);
         let mut sink = Record::default();
-        run_model(&mut m, &scene(None, 0.0), &opts(0), &mut sink);
+        run_model(
+            &mut m,
+            &scene(None, 0.0),
+            &opts(0),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(
             sink.progress.len(),
             21,
@@ -713,7 +874,14 @@ mod tests {
             cancel_at: Some(2),
             ..Default::default()
         };
-        let s = run_model(&mut m, &scene(None, 0.0), &opts(0), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(None, 0.0),
+            &opts(0),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Cancelled);
         assert_eq!(s.steps, 3);
         assert!(s.message.is_some());
@@ -728,7 +896,14 @@ mod tests {
         let mut m = Fake::new(100, 0.1);
         m.fail_at = Some(6);
         let mut sink = Record::default();
-        let s = run_model(&mut m, &scene(Some(0.25), 0.0), &opts(3_600_000), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(Some(0.25), 0.0),
+            &opts(3_600_000),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Failed);
         assert_eq!(
             s.message.as_deref(),
@@ -750,7 +925,14 @@ mod tests {
         let mut m = Fake::new(100, 0.1);
         m.panic_at = Some(4);
         let mut sink = Record::default();
-        let s = run_model(&mut m, &scene(None, 0.0), &opts(3_600_000), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(None, 0.0),
+            &opts(3_600_000),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Failed);
         let msg = s.message.unwrap();
         assert!(msg.contains("panicked in step 4"), "{msg}");
@@ -766,7 +948,14 @@ mod tests {
             fail_energy_at: Some(1),
             ..Default::default()
         };
-        let s = run_model(&mut m, &scene(None, 0.0), &opts(0), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(None, 0.0),
+            &opts(0),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Failed);
         assert_eq!(
             s.message.as_deref(),
