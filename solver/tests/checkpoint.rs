@@ -261,3 +261,44 @@ fn mismatched_or_corrupt_checkpoints_are_refused() {
         Err(CheckpointError::Corrupt(_))
     ));
 }
+
+/// Size and time of a checkpoint and a restore of `scenes/rosakis-shear-mini.json` after 100
+/// steps (a measurement for `docs/service.md`, not a check; `--ignored --nocapture`). With
+/// `CHECKPOINT_OUT` set, the bytes are written there (to measure their compression).
+#[test]
+#[ignore]
+fn measure_checkpoint_of_rosakis_shear_mini() {
+    let text = std::fs::read_to_string(concat!(
+        env!("CARGO_MANIFEST_DIR"),
+        "/../scenes/rosakis-shear-mini.json"
+    ))
+    .unwrap();
+    let s: Scene = serde_json::from_str(&text).unwrap();
+    let valid = ValidScene::new(s).unwrap();
+    let mut sim = Simulation::new(&valid, config(2)).unwrap();
+    for _ in 0..100 {
+        sim.step().unwrap();
+    }
+    let t0 = std::time::Instant::now();
+    let bytes = sim.checkpoint();
+    let t_write = t0.elapsed();
+    let t0 = std::time::Instant::now();
+    let back = Simulation::restore(&valid, config(2), &bytes).unwrap();
+    let t_read = t0.elapsed();
+    let t0 = std::time::Instant::now();
+    let mut step_sim = back;
+    step_sim.step().unwrap();
+    eprintln!(
+        "rosakis-shear-mini: {} particles, checkpoint {} bytes ({:.1} B/particle) in {:.1} ms, \
+         restore {:.1} ms, one step {:.1} ms",
+        sim.particle_count(),
+        bytes.len(),
+        bytes.len() as f64 / sim.particle_count() as f64,
+        t_write.as_secs_f64() * 1e3,
+        t_read.as_secs_f64() * 1e3,
+        t0.elapsed().as_secs_f64() * 1e3
+    );
+    if let Some(p) = std::env::var_os("CHECKPOINT_OUT") {
+        std::fs::write(p, &bytes).unwrap();
+    }
+}
