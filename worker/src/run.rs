@@ -657,6 +657,9 @@ mod tests {
         fn is_finished(&self) -> bool {
             self.taken >= self.n
         }
+        fn checkpoint(&self) -> Option<Vec<u8>> {
+            Some(self.taken.to_le_bytes().to_vec())
+        }
         fn particle_count(&self) -> usize {
             100
         }
@@ -711,6 +714,8 @@ mod tests {
         energy_batches: usize,
         /// Order of calls, to check flush-before-progress.
         log: Vec<&'static str>,
+        checkpoints: Vec<(CheckpointAt, Vec<u8>)>,
+        handed_back: Vec<Progress>,
     }
 
     impl RunSink for Record {
@@ -745,6 +750,16 @@ mod tests {
         fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
             self.log.push("finish");
             self.finished.push(summary.clone());
+            Ok(())
+        }
+        fn checkpoint(&mut self, bytes: &[u8], at: &CheckpointAt) -> Result<(), SinkError> {
+            self.log.push("checkpoint");
+            self.checkpoints.push((*at, bytes.to_vec()));
+            Ok(())
+        }
+        fn hand_back(&mut self, p: &Progress) -> Result<(), SinkError> {
+            self.log.push("hand_back");
+            self.handed_back.push(*p);
             Ok(())
         }
     }
@@ -973,5 +988,64 @@ mod tests {
         let n = 3;
         let p = std::panic::catch_unwind(|| panic!("formatted {n}")).unwrap_err();
         assert_eq!(panic_message(&*p), "formatted 3");
+    }
+
+    /// Checkpoints by steps come at history samples, after the rows sampled so far were
+    /// given to the sink, with the loop's cursor; a hand back checkpoints at once, stops the
+    /// run and hands it back instead of finishing it. (One test: the hand-back flag is
+    /// global to the process, and only runs with a checkpoint policy read it.)
+    #[test]
+    fn checkpoints_follow_the_policy_and_a_hand_back_stops_the_run() {
+        let policy = CheckpointPolicy {
+            steps: Some(3),
+            every: None,
+        };
+        let mut m = Fake::new(10, 0.1);
+        let mut sink = Record::default();
+        let s = run_model(
+            &mut m,
+            &scene(Some(0.2), 0.0),
+            &opts(3_600_000),
+            policy,
+            None,
+            &mut sink,
+        );
+        assert_eq!(s.status, RunStatus::Completed);
+        // Samples at steps 2, 4, 6, 8, 10: due after 3 steps → at 4 and 8.
+        let steps: Vec<u64> = sink.checkpoints.iter().map(|c| c.0.step).collect();
+        assert_eq!(steps, vec![4, 8]);
+        for (at, bytes) in &sink.checkpoints {
+            let d = crate::checkpoint::decode(bytes, &scene(Some(0.2), 0.0).hash()).unwrap();
+            assert_eq!(d.solver, at.step.to_le_bytes().to_vec());
+            assert_eq!(d.cursor.sampled_at, Some(at.step));
+        }
+        let first = sink.log.iter().position(|l| *l == "checkpoint").unwrap();
+        assert_eq!(sink.log[first - 1], "crack_tips", "{:?}", sink.log);
+        assert!(sink.energy.iter().any(|r| (r.time - 0.4).abs() < 1e-9));
+
+        crate::handback::request();
+        let mut m = Fake::new(10, 0.1);
+        let mut sink = Record::default();
+        let policy = CheckpointPolicy {
+            steps: Some(1000),
+            every: None,
+        };
+        let s = run_model(
+            &mut m,
+            &scene(Some(0.2), 0.0),
+            &opts(3_600_000),
+            policy,
+            None,
+            &mut sink,
+        );
+        assert_eq!(s.status, RunStatus::Cancelled);
+        assert_eq!(s.steps, 1);
+        assert!(
+            sink.finished.is_empty(),
+            "a handed-back run is not finished"
+        );
+        assert_eq!(sink.checkpoints.len(), 1);
+        assert_eq!(sink.handed_back.len(), 1);
+        assert_eq!(sink.log.last(), Some(&"hand_back"));
     }
 }
