@@ -198,6 +198,16 @@ fn a_killed_workers_job_resumes_from_its_checkpoint_as_if_never_interrupted() {
          steps redone",
         reached.saturating_sub(from)
     );
+    for l in log
+        .lines()
+        .filter(|l| l.contains("checkpoint stored"))
+        .take(3)
+    {
+        eprintln!(
+            "checkpoint stored:{}",
+            l.split_once("checkpoint stored").map_or(l, |x| x.1)
+        );
+    }
     assert!(
         !dir.path()
             .join("jobs")
