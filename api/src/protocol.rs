@@ -91,6 +91,22 @@ pub struct WorkerDied {
     pub cause: String,
 }
 
+/// `POST /api/v1/worker/jobs/{id}/release`: a worker hands its job back (a batch worker
+/// told to stop before its time limit, e.g. Slurm's `--signal`): the job returns to the
+/// queue without counting the attempt, for another worker to run (from its checkpoint,
+/// where one was stored).
+#[derive(Debug, Clone, Serialize, Deserialize, utoipa::ToSchema)]
+pub struct WorkerRelease {
+    /// Fencing token of the claim handed back.
+    pub fence: i64,
+    /// Why, for the job's message (e.g. `SIGUSR1 from the scheduler`).
+    #[serde(default)]
+    pub reason: String,
+    /// Who hands it back: the worker id and, where known, host and scheduler job.
+    #[serde(default)]
+    pub worker: String,
+}
+
 /// Lines of a worker's stderr kept for the message of the job it held when it died.
 pub const STDERR_TAIL: usize = 8;
 

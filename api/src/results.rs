@@ -12,7 +12,7 @@ pub const ENERGY_CSV_HEADER: &str =
 /// Column header of `crack_tips.csv`.
 /// Column header of `crack_tips.csv`: `run-output.md`'s columns, then (an extension, at the
 /// end) the path-independence report and the crack-opening K.
-pub const CRACK_TIPS_CSV_HEADER: &str = "time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing,j1_half,j2_half,j1_double,j2_double,k1_cod,k2_cod";
+pub const CRACK_TIPS_CSV_HEADER: &str = "time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing,j1_half,j2_half,j1_double,j2_double,k1_cod,k2_cod,zone_x,zone_y";
 
 /// One energy sample (J per the scene's thickness). Every number may be NaN (written as
 /// JSON `null`, read back as NaN: [`crate::nan`]).
@@ -205,6 +205,23 @@ pub struct CrackTipRow {
     #[schemars(with = "Option<f64>")]
     #[schema(value_type = Option<f64>)]
     pub k2_cod: f64,
+    /// A cohesive interface's process-zone front x (m): its farthest bond point past the peak
+    /// traction (`algorithm.md` §8). NaN (null) for crack tips and before any point softens.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub zone_x: f64,
+    /// The process-zone front's y (m), as `zone_x`.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub zone_y: f64,
 }
 
 impl CrackTipRow {
@@ -238,7 +255,9 @@ impl CrackTipRow {
                 self.j1_double,
                 self.j2_double,
                 self.k1_cod,
-                self.k2_cod
+                self.k2_cod,
+                self.zone_x,
+                self.zone_y
             ])
         )
     }
@@ -333,6 +352,11 @@ pub struct Provenance {
     pub started_at: String,
     /// When it ended (RFC 3339 UTC, as the summary was written).
     pub finished_at: String,
+    /// The batch scheduler's job that ran it, when it ran under one: `slurm job 1234
+    /// (array 1230 task 4)`, `kubernetes job fracture-worker index 2 (pod …)`. Absent
+    /// otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub scheduler: Option<String>,
 }
 
 /// Fracture energy of the growing tips of a run (J per the scene's thickness × thickness, as

@@ -54,6 +54,26 @@ pub struct WorkerArgs {
     /// sample (0: not by time).
     #[arg(long, env = "FRACTURE_CHECKPOINT_MINUTES", default_value_t = 5.0)]
     pub checkpoint_minutes: f64,
+    /// Exit (status 0) after this many seconds without a job, e.g. once the queue is
+    /// drained (for workers started by a batch scheduler).
+    #[arg(long, env = "FRACTURE_IDLE_EXIT", value_parser = parse_seconds, allow_negative_numbers = true)]
+    pub idle_exit: Option<f64>,
+    /// Exit (status 0) after claiming this many jobs.
+    #[arg(long, env = "FRACTURE_MAX_JOBS", value_parser = clap::value_parser!(u64).range(1..), allow_negative_numbers = true)]
+    pub max_jobs: Option<u64>,
+    /// Claims made by earlier worker processes of the same supervisor (set by it).
+    #[arg(long, hide = true, default_value_t = 0)]
+    pub jobs_before: u64,
+}
+
+/// A number of seconds: finite, > 0, at most a year.
+fn parse_seconds(s: &str) -> Result<f64, String> {
+    match s.trim().parse::<f64>() {
+        Ok(v) if v.is_finite() && v > 0.0 && v <= 3.2e7 => Ok(v),
+        _ => Err(format!(
+            "`{s}` is not a number of seconds > 0 (at most a year)"
+        )),
+    }
 }
 
 /// Arguments of `fracture submit`.
@@ -307,9 +327,24 @@ pub fn worker(a: WorkerArgs) -> ExitCode {
             ),
         }
     }
-    let host = std::fs::read_to_string("/etc/hostname")
-        .map(|h| h.trim().to_string())
-        .unwrap_or_else(|_| "host".into());
+    // Stop signals hand the job back (batch workers, `fracture_worker::batch`); a server's
+    // local workers are stopped by their server instead.
+    #[cfg(unix)]
+    if (a.supervised_child || a.parent_pid.is_none())
+        && let Err(e) = fracture_worker::batch::hand_back_on_signals()
+    {
+        tracing::warn!(error = %e, "cannot handle stop signals");
+    }
+    let mut host = fracture_worker::provenance::host()
+        .or_else(|| {
+            std::fs::read_to_string("/etc/hostname")
+                .ok()
+                .map(|h| h.trim().to_string())
+        })
+        .unwrap_or_else(|| "host".into());
+    if let Some(tag) = fracture_worker::provenance::scheduler_tag() {
+        host = format!("{host}-{tag}");
+    }
     let cfg = WorkerConfig {
         server: a.server,
         token: a.token,
@@ -330,6 +365,9 @@ pub fn worker(a: WorkerArgs) -> ExitCode {
             every: (a.checkpoint_minutes.is_finite() && a.checkpoint_minutes > 0.0)
                 .then(|| Duration::from_secs_f64(a.checkpoint_minutes * 60.0)),
         },
+        idle_exit: a.idle_exit.map(Duration::from_secs_f64),
+        max_jobs: a.max_jobs,
+        jobs_before: a.jobs_before,
     };
     match remote::run_worker(cfg) {
         Ok(()) => ExitCode::SUCCESS,

@@ -468,6 +468,7 @@ async fn worker_routes_check_the_token_before_the_body() {
         "/api/v1/worker/jobs/x/energy",
         "/api/v1/worker/jobs/x/finish",
         "/api/v1/worker/jobs/x/died",
+        "/api/v1/worker/jobs/x/release",
     ] {
         let (s, v) = call(&st, post(uri, "{not json", None)).await;
         assert_eq!(s, StatusCode::UNAUTHORIZED, "{uri}: {v}");
@@ -587,4 +588,62 @@ async fn a_reported_worker_death_releases_the_claim_by_the_local_rules() {
             .contains("memory allocation of 20412450768 bytes failed"),
         "{j}"
     );
+}
+
+/// `POST /api/v1/worker/jobs/{id}/release`: a batch worker told to stop hands its claim
+/// back; the job is queued again without counting the attempt (cancelled if that was asked),
+/// fenced like every worker write.
+#[tokio::test]
+async fn a_handed_back_claim_is_queued_again_without_counting_the_attempt() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let (_, job) = call(&st, post("/api/v1/jobs", scene().to_string(), None)).await;
+    let id = job["id"].as_str().unwrap().to_string();
+    let claim = |worker: &str| {
+        post(
+            "/api/v1/worker/claim",
+            json!({"worker_id": worker, "wait_seconds": 0}).to_string(),
+            Some("wt"),
+        )
+    };
+    let release = |fence: i64| {
+        post(
+            &format!("/api/v1/worker/jobs/{id}/release"),
+            json!({"fence": fence, "reason": "SIGUSR1, at step 40",
+                   "worker": "node7-slurm12_3-99-abc, slurm job 15 (array 12 task 3)"})
+            .to_string(),
+            Some("wt"),
+        )
+    };
+    let (_, c) = call(&st, claim("node7-slurm12_3-99-abc")).await;
+    assert_eq!(c["attempt"], 1);
+    let fence = c["fence"].as_i64().unwrap();
+    let (s, v) = call(&st, release(fence + 1)).await;
+    assert_eq!(
+        s,
+        StatusCode::CONFLICT,
+        "a wrong fence changes nothing: {v}"
+    );
+    let (s, j) = call(&st, release(fence)).await;
+    assert_eq!(s, StatusCode::OK, "{j}");
+    assert_eq!(j["status"], "queued", "{j}");
+    assert_eq!(j["attempts"], 0, "no attempt counted: {j}");
+    let m = j["message"].as_str().unwrap();
+    assert!(
+        m.contains("handed back by its worker node7-slurm12_3-99-abc")
+            && m.contains("slurm job 15 (array 12 task 3)")
+            && m.contains("SIGUSR1, at step 40"),
+        "{m}"
+    );
+    let (s, _) = call(&st, release(fence)).await;
+    assert_eq!(s, StatusCode::CONFLICT, "released once");
+    // Another worker claims it as its first attempt; handed back while cancellation was
+    // asked, it ends cancelled.
+    let (_, c) = call(&st, claim("w2")).await;
+    assert_eq!(c["attempt"], 1, "{c}");
+    let (s, _) = call(&st, post(&format!("/api/v1/jobs/{id}/cancel"), "", None)).await;
+    assert_eq!(s, StatusCode::OK);
+    let (s, j) = call(&st, release(c["fence"].as_i64().unwrap())).await;
+    assert_eq!(s, StatusCode::OK, "{j}");
+    assert_eq!(j["status"], "cancelled", "{j}");
 }

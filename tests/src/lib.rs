@@ -352,6 +352,20 @@ impl RemoteWorker {
     pub fn pid(&self) -> u32 {
         self.child.id()
     }
+
+    /// Wait for the supervisor to exit by itself (at most `timeout`; `None`: still running).
+    pub fn wait_exit(&mut self, timeout: Duration) -> Option<std::process::ExitStatus> {
+        let t0 = Instant::now();
+        loop {
+            if let Ok(Some(s)) = self.child.try_wait() {
+                return Some(s);
+            }
+            if t0.elapsed() >= timeout {
+                return None;
+            }
+            std::thread::sleep(Duration::from_millis(50));
+        }
+    }
 }
 
 impl Drop for RemoteWorker {

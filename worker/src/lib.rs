@@ -10,13 +10,16 @@
 //! * [`remote`] is the remote worker: claims jobs from a server over HTTP, heartbeats,
 //!   obeys cancellation and streams the results ([`remote::run_worker`]).
 //! * [`checkpoint`]: a remote job writes checkpoints every N steps or M minutes and when
-//!   it is asked to hand its job back ([`handback`]); a re-claimed job resumes from the
-//!   last one ([`run_job`]).
+//!   it stops to hand its job back ([`Control::HandBack`]); a re-claimed job resumes from
+//!   the last one ([`run_job`]).
 //! * [`supervise`] runs the remote worker loop in a child process and reports the child's
 //!   death (signal, exit status, last lines of stderr) for the job it held.
+//! * [`batch`]: workers of a batch scheduler (Slurm, Kubernetes): stop signals that hand the
+//!   running job back ([`handback`]), idle and job-count limits.
 //!
 //! The `fields.mcap` format itself lives in [`fracture_results::mcapfile`].
 
+pub mod batch;
 pub mod checkpoint;
 pub mod handback;
 pub mod local;
@@ -40,6 +43,13 @@ pub enum Control {
     Continue,
     /// Stop now; the run ends with status `cancelled`.
     Cancel,
+    /// Stop now to hand the job back to the queue (a batch worker told to stop,
+    /// [`handback`]): the rows sampled so far are flushed, but there is no final sample, no
+    /// last progress report and no [`RunSink::finish`]; the returned summary says
+    /// `cancelled` with the message `handed back at step N` and is not a result. The caller
+    /// hands the job back after [`run_scene`] returns (so a checkpoint written as the loop
+    /// stops comes first).
+    HandBack,
 }
 
 /// A sink could not take the results (IO error, server gone, lease lost, …). The run ends
@@ -58,7 +68,8 @@ impl From<std::io::Error> for SinkError {
 /// produced (rows in batches), `progress` about every [`RunOptions::flush_every`] of wall
 /// time (rows sampled so far are flushed just before it), a last `progress`, then `finish`.
 pub trait RunSink {
-    /// Progress report; return [`Control::Cancel`] to stop the run. Called about every
+    /// Progress report; return [`Control::Cancel`] to stop the run ([`Control::HandBack`]:
+    /// stop it unfinished). Called about every
     /// [`RunOptions::flush_every`] of wall time and once at the end (where the answer is
     /// ignored).
     fn progress(&mut self, p: &Progress) -> Result<Control, SinkError>;
@@ -69,7 +80,7 @@ pub trait RunSink {
     /// One field snapshot.
     fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError>;
     /// The run is over; called exactly once, also after failures and cancellation (not
-    /// after a hand back).
+    /// after [`Control::HandBack`]: the run is not over).
     fn finish(&mut self, summary: &Summary) -> Result<(), SinkError>;
     /// A checkpoint of the run ([`checkpoint`]), taken after every row sampled at or before
     /// `at.time` was given to the sink. A sink that keeps none ignores it. An error is
@@ -77,12 +88,6 @@ pub trait RunSink {
     fn checkpoint(&mut self, bytes: &[u8], at: &CheckpointAt) -> Result<(), SinkError> {
         let _ = (bytes, at);
         Ok(())
-    }
-    /// The run stopped to be handed back ([`handback`]) after its last checkpoint: give the
-    /// job back to whoever resumes it; `finish` is not called.
-    fn hand_back(&mut self, p: &Progress) -> Result<(), SinkError> {
-        let _ = p;
-        Err(SinkError("this sink cannot hand a run back".into()))
     }
 }
 
@@ -123,8 +128,5 @@ impl<S: RunSink + ?Sized> RunSink for &mut S {
     }
     fn checkpoint(&mut self, bytes: &[u8], at: &CheckpointAt) -> Result<(), SinkError> {
         (**self).checkpoint(bytes, at)
-    }
-    fn hand_back(&mut self, p: &Progress) -> Result<(), SinkError> {
-        (**self).hand_back(p)
     }
 }

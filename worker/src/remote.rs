@@ -1,6 +1,8 @@
 //! The remote worker: claims jobs from a server over HTTP (`/api/v1/worker/…`), runs them
 //! with [`run_scene`](crate::run_scene), heartbeats, obeys cancellation, and streams the
-//! results through an HTTP [`RunSink`], retrying transient failures.
+//! results through an HTTP [`RunSink`], retrying transient failures. Asked to stop
+//! ([`crate::batch`]) it hands its job back to the queue and exits; it also exits after
+//! `idle_exit` without a job or after `max_jobs` claims.
 //!
 //! Memory: before building a job's simulation the worker estimates its memory
 //! (`fracture_api::cost`); a job over the worker's `max_memory` fails at once with the
@@ -31,7 +33,7 @@ use reqwest::blocking::{Client, Response};
 
 use fracture_api::protocol::{
     Claim, ClaimRequest, CrackTipBatch, EnergyBatch, FinishRequest, Heartbeat, HeartbeatReply,
-    WorkerDied,
+    WorkerRelease,
 };
 use fracture_results::codec;
 
@@ -79,6 +81,14 @@ pub struct WorkerConfig {
     pub announce_claims: bool,
     /// When a running job is checkpointed (`docs/service.md`, "Checkpoints").
     pub checkpoints: crate::CheckpointPolicy,
+    /// Exit (status 0) after this long without a job (a batch worker gives its node back
+    /// once the queue is drained); `None`: never.
+    pub idle_exit: Option<Duration>,
+    /// Exit (status 0) after this many claims; `None`: no limit.
+    pub max_jobs: Option<u64>,
+    /// Claims made before this process by earlier worker processes of the same supervisor
+    /// (they count towards `max_jobs`).
+    pub jobs_before: u64,
 }
 
 /// How long uploads are retried while the server answers 507 (its disk is full).
@@ -225,16 +235,44 @@ pub fn run_worker(cfg: WorkerConfig) -> anyhow::Result<()> {
         base: cfg.server.trim_end_matches('/').to_string(),
         token: cfg.token.clone(),
     };
-    tracing::info!(worker = %cfg.worker_id, server = %api.base, "worker started");
+    tracing::info!(
+        worker = %cfg.worker_id,
+        server = %api.base,
+        host = crate::provenance::host().as_deref().unwrap_or("?"),
+        scheduler = crate::provenance::scheduler().as_deref().unwrap_or("none"),
+        "worker started"
+    );
     let mut failing_since: Option<Instant> = None;
+    let mut claims = cfg.jobs_before;
+    let mut idle_since = Instant::now();
     loop {
         if parent_gone(&cfg) {
             tracing::info!("parent server exited; worker stops");
             return Ok(());
         }
+        if crate::handback::requested() {
+            tracing::info!("asked to stop; worker exits");
+            return Ok(());
+        }
+        if let Some(max) = cfg.max_jobs.filter(|m| claims >= *m) {
+            tracing::info!(
+                jobs = claims,
+                "ran its {max} jobs (--max-jobs); worker exits"
+            );
+            return Ok(());
+        }
+        let mut wait = 10.0_f64;
+        if let Some(idle) = cfg.idle_exit {
+            let left = idle.saturating_sub(idle_since.elapsed());
+            if left.is_zero() {
+                tracing::info!(idle = ?idle, "no job for the idle time (--idle-exit); worker exits");
+                return Ok(());
+            }
+            wait = wait.min(left.as_secs_f64());
+        }
         let req = ClaimRequest {
             worker_id: cfg.worker_id.clone(),
-            wait_seconds: 10.0,
+            wait_seconds: wait,
         };
         match api.post_json("claim", &req) {
             Ok(r) if r.status() == StatusCode::NO_CONTENT => failing_since = None,
@@ -247,9 +285,11 @@ pub fn run_worker(cfg: WorkerConfig) -> anyhow::Result<()> {
                         continue;
                     }
                 };
-                run_claim(&api, &cfg, claim);
-                if crate::handback::requested() {
-                    tracing::info!("job handed back; worker stops");
+                claims += 1;
+                let handed_back = run_claim(&api, &cfg, claim);
+                idle_since = Instant::now();
+                if handed_back {
+                    tracing::info!("job handed back; worker exits");
                     return Ok(());
                 }
             }
@@ -295,11 +335,21 @@ fn failed_summary(scene: Option<&Scene>, failure: FailureKind, message: String) 
     }
 }
 
-fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
+/// Run one claimed job to its end; returns whether it was handed back instead (a stop
+/// signal, [`crate::batch`]).
+fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) -> bool {
     let job = claim.job_id.clone();
     let fence = claim.fence;
     if cfg.announce_claims {
         crate::supervise::announce(Some((&job, fence)));
+    }
+    if crate::handback::requested() {
+        // Asked to stop while the claim was on its way: give it back untouched.
+        hand_back(api, cfg, &job, fence, None);
+        if cfg.announce_claims {
+            crate::supervise::announce(None);
+        }
+        return true;
     }
     tracing::info!(job = %job, attempt = claim.attempt, "running");
     let cancel = Arc::new(AtomicBool::new(false));
@@ -351,7 +401,7 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
         cancel: cancel.clone(),
         lost: lost.clone(),
         finished: false,
-        handed_back: false,
+        handed_back: None,
     };
     // The server validated the scene before queueing it; a worker of another version may
     // still disagree, so it validates once more here (the only way to a `ValidScene`).
@@ -393,15 +443,70 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) {
             format!("the claimed scene could not be read: {e}"),
         ),
     };
-    if !sink.finished && !sink.handed_back && !lost.load(Ordering::SeqCst) {
+    let handed_back = sink.handed_back;
+    if handed_back.is_none() && !sink.finished && !lost.load(Ordering::SeqCst) {
         let _ = sink.finish(&summary);
     }
     let _ = stop_tx.send(());
     let _ = hb.join();
+    if let Some(step) = handed_back
+        && !lost.load(Ordering::SeqCst)
+    {
+        // After the run function returned: a checkpoint written as it stopped comes first.
+        hand_back(api, cfg, &job, fence, Some(step));
+    }
     if cfg.announce_claims {
         crate::supervise::announce(None);
     }
-    tracing::info!(job = %job, status = ?summary.status, "run ended");
+    match handed_back {
+        Some(step) => tracing::info!(job = %job, step, "run handed back"),
+        None => tracing::info!(job = %job, status = ?summary.status, "run ended"),
+    }
+    handed_back.is_some()
+}
+
+/// Give the claim `job`/`fence` back to the queue (`POST /api/v1/worker/jobs/{id}/release`),
+/// naming this worker, its host and scheduler job, and why (the stop signal; `step`: where
+/// the run stopped). Retried for 30 s while the server is unreachable; otherwise the job's
+/// lease brings it back.
+fn hand_back(api: &Api, cfg: &WorkerConfig, job: &str, fence: i64, step: Option<u64>) {
+    let mut reason = crate::batch::stop_reason().unwrap_or_else(|| "asked to stop".into());
+    if let Some(step) = step {
+        reason.push_str(&format!(", at step {step}"));
+    }
+    let mut worker = cfg.worker_id.clone();
+    if let Some(h) = crate::provenance::host() {
+        worker.push_str(&format!(" on {h}"));
+    }
+    if let Some(s) = crate::provenance::scheduler() {
+        worker.push_str(&format!(", {s}"));
+    }
+    let body = WorkerRelease {
+        fence,
+        reason,
+        worker,
+    };
+    let path = format!("jobs/{job}/release");
+    let r = api.retry(Duration::from_secs(30), || {
+        api.post_json(&path, &body)?
+            .json::<serde_json::Value>()
+            .map_err(|e| ClientError::Transient(e.to_string()))
+    });
+    match r {
+        Ok(j) => tracing::info!(
+            job,
+            status = j["status"].as_str().unwrap_or("?"),
+            "job handed back to the server"
+        ),
+        Err(ClientError::Fenced(m)) => {
+            tracing::info!(job, reason = %m, "the job was no longer held (finished or released)")
+        }
+        Err(e) => tracing::warn!(
+            job,
+            error = %e,
+            "cannot hand the job back; the server will find it by its lease"
+        ),
+    }
 }
 
 /// Run a claimed job, from its checkpoint when the server has one this build can use; a
@@ -539,7 +644,8 @@ struct HttpSink<'a> {
     cancel: Arc<AtomicBool>,
     lost: Arc<AtomicBool>,
     finished: bool,
-    handed_back: bool,
+    /// The step at which the run was told to hand the job back (`Control::HandBack`).
+    handed_back: Option<u64>,
 }
 
 impl HttpSink<'_> {
@@ -583,6 +689,9 @@ impl RunSink for HttpSink<'_> {
         }
         Ok(if self.cancel.load(Ordering::SeqCst) {
             Control::Cancel
+        } else if crate::handback::requested() {
+            self.handed_back = Some(p.step);
+            Control::HandBack
         } else {
             Control::Continue
         })
@@ -641,24 +750,6 @@ impl RunSink for HttpSink<'_> {
             .retry(Self::BUDGET, || {
                 self.api.put_bytes(&path, bytes.to_vec()).map(drop)
             })
-            .map_err(|e| self.fail(e))
-    }
-
-    fn hand_back(&mut self, p: &Progress) -> Result<(), SinkError> {
-        self.guard()?;
-        self.handed_back = true;
-        // Released by the rules of a worker's death (re-queued at once): the next claim
-        // resumes from the checkpoint just written.
-        let d = WorkerDied {
-            fence: self.fence,
-            cause: format!(
-                "handed back by its worker at step {} (resumes from its checkpoint)",
-                p.step
-            ),
-        };
-        let path = format!("jobs/{}/died", self.job);
-        self.api
-            .retry(Self::BUDGET, || self.api.post_json(&path, &d).map(drop))
             .map_err(|e| self.fail(e))
     }
 

@@ -229,11 +229,10 @@ pub(crate) fn panic_message(p: &(dyn Any + Send)) -> String {
 /// Why the loop stopped early.
 enum Stop {
     Cancelled,
+    HandedBack,
     Step(StepError),
     Panic(String),
     Sink(SinkError),
-    /// Checkpointed and handed back ([`crate::handback`]).
-    HandBack,
 }
 
 /// Sampling cadence: sample k is due at k·interval (k = 0, 1, …); `None` interval = every
@@ -462,51 +461,47 @@ pub(crate) fn run_model<M: Model>(
             if snapshot_interval.is_some() && snapshots.due(t, dt) {
                 lp.snapshot()?;
             }
-            // Checkpoints: by the policy at a history sample, and at once on a hand back.
-            let hand_back = policy.enabled() && crate::handback::requested();
+            // The loop's cursor, for a checkpoint taken now.
+            let cursor = |history: &Cadence, snapshots: &Cadence, lp: &Loop<'_, M>| LoopCursor {
+                history_next: history.next,
+                snapshot_next: snapshots.next,
+                snapshots: lp.snapshots,
+                sampled_at: lp.sampled_at,
+                active_sum,
+                active_steps,
+                wall_seconds: wall_before + start.elapsed().as_secs_f64(),
+            };
+            // Checkpoints by the policy, at a history sample.
             let steps = lp.model.steps_taken();
-            if hand_back
-                || (sampled && policy.due(steps - last_checkpoint.0, last_checkpoint.1.elapsed()))
-            {
-                let cursor = LoopCursor {
-                    history_next: history.next,
-                    snapshot_next: snapshots.next,
-                    snapshots: lp.snapshots,
-                    sampled_at: lp.sampled_at,
-                    active_sum,
-                    active_steps,
-                    wall_seconds: wall_before + start.elapsed().as_secs_f64(),
-                };
-                lp.checkpoint_now(&hash, cursor)?;
+            if sampled && policy.due(steps - last_checkpoint.0, last_checkpoint.1.elapsed()) {
+                let c = cursor(&history, &snapshots, &lp);
+                lp.checkpoint_now(&hash, c)?;
                 last_checkpoint = (steps, Instant::now());
-                if hand_back {
-                    return Err(Stop::HandBack);
-                }
             }
             if last_report.elapsed() >= opts.flush_every {
                 last_report = Instant::now();
                 lp.flush().map_err(Stop::Sink)?;
                 let p = lp.progress();
-                if lp.sink.progress(&p).map_err(Stop::Sink)? == Control::Cancel {
-                    return Err(Stop::Cancelled);
+                match lp.sink.progress(&p).map_err(Stop::Sink)? {
+                    Control::Continue => {}
+                    Control::Cancel => return Err(Stop::Cancelled),
+                    // The job goes back to the queue unfinished. Checkpoint: a checkpoint of
+                    // the state at this step is written here, before the loop returns (the
+                    // caller releases the job after `run_scene` returns).
+                    Control::HandBack => {
+                        if policy.enabled() {
+                            let c = cursor(&history, &snapshots, &lp);
+                            lp.checkpoint_now(&hash, c)?;
+                        }
+                        return Err(Stop::HandedBack);
+                    }
                 }
             }
         }
         Ok(())
     })();
     let wall = wall_before + start.elapsed().as_secs_f64();
-    if matches!(result, Err(Stop::HandBack)) {
-        // Everything up to the checkpoint is sent; the job goes back to the queue.
-        summary.status = RunStatus::Cancelled;
-        summary.steps = lp.model.steps_taken();
-        summary.sim_time = lp.model.time();
-        summary.wall_seconds = wall;
-        summary.message = Some(match lp.sink.hand_back(&lp.progress()) {
-            Ok(()) => format!("handed back at step {}", summary.steps),
-            Err(e) => format!("could not hand the job back at step {}: {e}", summary.steps),
-        });
-        return summary;
-    }
+    let handed_back = matches!(result, Err(Stop::HandedBack));
 
     // One final sample where the last step was not sampled (also after a failure: the
     // state that failed is the diagnosis). Not after a panic or a sink error.
@@ -545,6 +540,10 @@ pub(crate) fn run_model<M: Model>(
             RunStatus::Cancelled,
             Some("cancelled on request".to_string()),
         ),
+        Err(Stop::HandedBack) => (
+            RunStatus::Cancelled,
+            Some(format!("handed back at step {}", summary.steps)),
+        ),
         Err(Stop::Step(e)) => {
             summary.failure = Some(FailureKind::Numerical);
             (RunStatus::Failed, Some(e.to_string()))
@@ -553,7 +552,6 @@ pub(crate) fn run_model<M: Model>(
             summary.failure = Some(FailureKind::Panic);
             (RunStatus::Failed, Some(m))
         }
-        Err(Stop::HandBack) => (RunStatus::Cancelled, Some("handed back".to_string())),
         Err(Stop::Sink(e)) => {
             summary.failure = Some(FailureKind::Output);
             (
@@ -569,6 +567,11 @@ pub(crate) fn run_model<M: Model>(
     {
         summary.status = RunStatus::Failed;
         summary.message = Some(m);
+    }
+    if handed_back {
+        // Not over: no last progress report and no finish (`Control::HandBack`).
+        stamp_finish(&mut summary);
+        return summary;
     }
     if !sink_broken {
         // The run is over: a late Cancel changes nothing.
@@ -715,15 +718,17 @@ mod tests {
         /// Order of calls, to check flush-before-progress.
         log: Vec<&'static str>,
         checkpoints: Vec<(CheckpointAt, Vec<u8>)>,
-        handed_back: Vec<Progress>,
+        /// Answer HandBack from this progress call on (0-based).
+        hand_back_at: Option<usize>,
     }
 
     impl RunSink for Record {
         fn progress(&mut self, p: &Progress) -> Result<Control, SinkError> {
             self.log.push("progress");
             self.progress.push(*p);
-            Ok(match self.cancel_at {
-                Some(k) if self.progress.len() > k => Control::Cancel,
+            Ok(match (self.cancel_at, self.hand_back_at) {
+                (Some(k), _) if self.progress.len() > k => Control::Cancel,
+                (_, Some(k)) if self.progress.len() > k => Control::HandBack,
                 _ => Control::Continue,
             })
         }
@@ -755,11 +760,6 @@ mod tests {
         fn checkpoint(&mut self, bytes: &[u8], at: &CheckpointAt) -> Result<(), SinkError> {
             self.log.push("checkpoint");
             self.checkpoints.push((*at, bytes.to_vec()));
-            Ok(())
-        }
-        fn hand_back(&mut self, p: &Progress) -> Result<(), SinkError> {
-            self.log.push("hand_back");
-            self.handed_back.push(*p);
             Ok(())
         }
     }
@@ -907,6 +907,53 @@ mod tests {
     }
 
     #[test]
+    fn hand_back_stops_without_final_sample_progress_or_finish() {
+        struct HandBackAt(Record, usize);
+        impl RunSink for HandBackAt {
+            fn progress(&mut self, p: &Progress) -> Result<Control, SinkError> {
+                self.0.progress(p)?;
+                Ok(if self.0.progress.len() > self.1 {
+                    Control::HandBack
+                } else {
+                    Control::Continue
+                })
+            }
+            fn energy(&mut self, rows: &[EnergyRow]) -> Result<(), SinkError> {
+                self.0.energy(rows)
+            }
+            fn crack_tips(&mut self, rows: &[CrackTipRow]) -> Result<(), SinkError> {
+                self.0.crack_tips(rows)
+            }
+            fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError> {
+                self.0.snapshot(snap)
+            }
+            fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
+                self.0.finish(summary)
+            }
+        }
+        let mut m = Fake::new(1000, 0.1);
+        let mut sink = HandBackAt(Record::default(), 2);
+        let s = run_model(
+            &mut m,
+            &scene(None, 0.0),
+            &opts(0),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
+        assert_eq!(s.status, RunStatus::Cancelled);
+        assert_eq!(s.steps, 3);
+        assert_eq!(s.message.as_deref(), Some("handed back at step 3"));
+        let r = &sink.0;
+        assert!(r.finished.is_empty(), "no finish after a hand-back");
+        assert_eq!(r.progress.len(), 3, "no last progress report");
+        // Rows up to the hand-back are delivered, and no extra final sample.
+        let ks: Vec<u64> = r.energy.iter().map(|e| e.kinetic as u64).collect();
+        assert_eq!(ks, vec![0, 1, 2, 3]);
+        assert_eq!(r.log.last(), Some(&"progress"));
+    }
+
+    #[test]
     fn step_error_fails_with_its_message_and_a_final_sample() {
         let mut m = Fake::new(100, 0.1);
         m.fail_at = Some(6);
@@ -991,9 +1038,8 @@ mod tests {
     }
 
     /// Checkpoints by steps come at history samples, after the rows sampled so far were
-    /// given to the sink, with the loop's cursor; a hand back checkpoints at once, stops the
-    /// run and hands it back instead of finishing it. (One test: the hand-back flag is
-    /// global to the process, and only runs with a checkpoint policy read it.)
+    /// given to the sink, with the loop's cursor; a hand back checkpoints at once and stops
+    /// the run without finishing it.
     #[test]
     fn checkpoints_follow_the_policy_and_a_hand_back_stops_the_run() {
         let policy = CheckpointPolicy {
@@ -1023,9 +1069,11 @@ mod tests {
         assert_eq!(sink.log[first - 1], "crack_tips", "{:?}", sink.log);
         assert!(sink.energy.iter().any(|r| (r.time - 0.4).abs() < 1e-9));
 
-        crate::handback::request();
         let mut m = Fake::new(10, 0.1);
-        let mut sink = Record::default();
+        let mut sink = Record {
+            hand_back_at: Some(0),
+            ..Record::default()
+        };
         let policy = CheckpointPolicy {
             steps: Some(1000),
             every: None,
@@ -1033,7 +1081,7 @@ mod tests {
         let s = run_model(
             &mut m,
             &scene(Some(0.2), 0.0),
-            &opts(3_600_000),
+            &opts(0),
             policy,
             None,
             &mut sink,
@@ -1045,7 +1093,7 @@ mod tests {
             "a handed-back run is not finished"
         );
         assert_eq!(sink.checkpoints.len(), 1);
-        assert_eq!(sink.handed_back.len(), 1);
-        assert_eq!(sink.log.last(), Some(&"hand_back"));
+        assert_eq!(sink.checkpoints[0].0.step, 1);
+        assert_eq!(sink.log.last(), Some(&"checkpoint"));
     }
 }

@@ -8,12 +8,18 @@
 //!
 //! A child that ends by itself (status 0, or 1: the server refused the token or stayed
 //! unreachable) while it holds nothing ends the supervisor with the same status.
+//!
+//! A stop signal (SIGTERM, SIGUSR1: [`crate::batch`]) is forwarded to the child, which hands
+//! its job back and exits; the supervisor then starts no other and exits with the child's
+//! status. Claims are counted across children (`--jobs-before`), so `--max-jobs` holds
+//! for the whole `fracture worker`.
 
 use std::collections::VecDeque;
 use std::ffi::OsString;
 use std::io::{BufRead, BufReader, Write};
 use std::path::PathBuf;
 use std::process::{Command, ExitStatus, Stdio};
+use std::sync::atomic::{AtomicBool, AtomicU32, Ordering};
 use std::sync::{Arc, Mutex};
 use std::time::{Duration, Instant};
 
@@ -67,8 +73,42 @@ pub struct Supervisor {
 struct Ended {
     status: ExitStatus,
     claim: Option<(String, i64)>,
+    /// Claims it announced.
+    claims: u64,
     tail: Vec<String>,
     ran: Duration,
+}
+
+/// The running child (its pid; 0: none) and whether a stop signal came.
+#[derive(Default)]
+struct Stopping {
+    child: AtomicU32,
+    asked: AtomicBool,
+}
+
+/// Forward the stop signals to the running child and remember that they came.
+#[cfg(unix)]
+fn forward_stop_signals(st: Arc<Stopping>) -> std::io::Result<()> {
+    crate::batch::on_stop_signals(move |sig| {
+        st.asked.store(true, Ordering::SeqCst);
+        let pid = st.child.load(Ordering::SeqCst);
+        tracing::warn!(
+            signal = %crate::batch::signal_text(sig),
+            child = pid,
+            "asked to stop: the worker process hands its job back"
+        );
+        let signal = if sig == signal_hook::consts::SIGUSR1 {
+            rustix::process::Signal::USR1
+        } else {
+            rustix::process::Signal::TERM
+        };
+        if let Some(p) = i32::try_from(pid)
+            .ok()
+            .and_then(rustix::process::Pid::from_raw)
+        {
+            let _ = rustix::process::kill_process(p, signal);
+        }
+    })
 }
 
 /// Run children until one ends by itself; returns its exit status code.
@@ -88,15 +128,22 @@ pub fn supervise(s: &Supervisor) -> i32 {
         base: s.server.trim_end_matches('/').to_string(),
         token: s.token.clone(),
     };
+    let stopping = Arc::new(Stopping::default());
+    #[cfg(unix)]
+    if let Err(e) = forward_stop_signals(stopping.clone()) {
+        tracing::warn!(error = %e, "cannot handle stop signals");
+    }
     let mut backoff = Duration::from_millis(200);
+    let mut claims = 0u64;
     loop {
-        let ended = match run_child(s) {
+        let ended = match run_child(s, claims, &stopping) {
             Ok(e) => e,
             Err(e) => {
                 tracing::error!(error = %e, exe = %s.exe.display(), "cannot start the worker process");
                 return 1;
             }
         };
+        claims += ended.claims;
         let cause = exit_cause(&ended.status, &ended.tail);
         match &ended.claim {
             Some((job, fence)) => {
@@ -109,6 +156,10 @@ pub fn supervise(s: &Supervisor) -> i32 {
                 }
                 tracing::warn!(cause = %cause, "the worker process died");
             }
+        }
+        if stopping.asked.load(Ordering::SeqCst) {
+            tracing::info!("asked to stop; no new worker process");
+            return ended.status.code().unwrap_or(0);
         }
         if ended.ran > Duration::from_secs(10) {
             backoff = Duration::from_millis(200);
@@ -149,17 +200,30 @@ fn report(api: &Api, job: &str, fence: i64, cause: &str) {
     }
 }
 
-/// Run one child to its end.
-fn run_child(s: &Supervisor) -> std::io::Result<Ended> {
+/// Run one child to its end (`claims`: those of the children before it).
+fn run_child(s: &Supervisor, claims: u64, stopping: &Stopping) -> std::io::Result<Ended> {
     let started = Instant::now();
     let mut child = Command::new(&s.exe)
         .args(&s.args)
         .arg("--parent-pid")
         .arg(std::process::id().to_string())
+        .arg("--jobs-before")
+        .arg(claims.to_string())
         .stdin(Stdio::null())
         .stdout(Stdio::piped())
         .stderr(Stdio::piped())
         .spawn()?;
+    stopping.child.store(child.id(), Ordering::SeqCst);
+    if stopping.asked.load(Ordering::SeqCst) {
+        // A signal that came while no child ran: this one stops at once.
+        #[cfg(unix)]
+        if let Some(p) = i32::try_from(child.id())
+            .ok()
+            .and_then(rustix::process::Pid::from_raw)
+        {
+            let _ = rustix::process::kill_process(p, rustix::process::Signal::TERM);
+        }
+    }
     tracing::info!(pid = child.id(), "worker process started");
     let tail = Arc::new(Mutex::new(VecDeque::with_capacity(STDERR_TAIL)));
     let err_thread = child.stderr.take().map(|err| {
@@ -180,22 +244,26 @@ fn run_child(s: &Supervisor) -> std::io::Result<Ended> {
     });
     let out_thread = child.stdout.take().map(|out| {
         std::thread::spawn(move || {
-            let mut claim = None;
+            let (mut claim, mut claims) = (None, 0u64);
             for line in BufReader::new(out).lines() {
                 let Ok(line) = line else { break };
                 match parse_claim_line(&line) {
-                    Some(c) => claim = c,
+                    Some(c) => {
+                        claims += u64::from(c.is_some());
+                        claim = c;
+                    }
                     None => {
                         let _ = writeln!(std::io::stdout().lock(), "{line}");
                     }
                 }
             }
-            claim
+            (claim, claims)
         })
     });
     let status = child.wait()?;
+    stopping.child.store(0, Ordering::SeqCst);
     // The pipes end with the child: what it wrote before dying is read first.
-    let claim = out_thread.and_then(|t| t.join().ok()).flatten();
+    let (claim, claims) = out_thread.and_then(|t| t.join().ok()).unwrap_or((None, 0));
     if let Some(t) = err_thread {
         let _ = t.join();
     }
@@ -206,6 +274,7 @@ fn run_child(s: &Supervisor) -> std::io::Result<Ended> {
     Ok(Ended {
         status,
         claim,
+        claims,
         tail,
         ran: started.elapsed(),
     })

@@ -73,6 +73,8 @@ fn local_output_writes_the_run_output_files() {
         j2_double: -6.0,
         k1_cod: 1.1e6,
         k2_cod: 3.0e4,
+        zone_x: 0.021,
+        zone_y: 0.0275,
     };
     sink.energy(&[e, e]).unwrap();
     sink.crack_tips(&[t]).unwrap();

@@ -79,6 +79,8 @@ fn tip(i: usize, t: u32) -> CrackTipRow {
         j2_double: -2.0e-3,
         k1_cod: 1.2e6,
         k2_cod: -3.0e4,
+        zone_x: 0.021,
+        zone_y: 0.0275,
     }
 }
 

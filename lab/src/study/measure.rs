@@ -42,6 +42,8 @@ pub(super) struct Measured {
     /// Largest distance (m) of the tip from the bond's material line: the tip's y against the
     /// initial bond y plus the material's y displacement at the tip, at every snapshot.
     pub(super) off_material: f64,
+    /// The last energy row's `fracture` (J): tips' zones and cohesive traction work.
+    pub(super) fracture_work: f64,
 }
 
 impl Measured {
@@ -149,21 +151,28 @@ fn bond_displacement(snap: &Snapshot, x_tip: f64, y_bond: f64) -> Option<f64> {
     (n > 0.0).then(|| sum / n)
 }
 
-/// The sink of a study run: keeps the tip of the first crack and the fringe snapshots.
+/// The sink of a study run: keeps one tip's rows (crack index, tip) and the fringe
+/// snapshots.
 struct Collect {
     m: Measured,
+    target: (u32, u32),
 }
 
 impl RunSink for Collect {
     fn progress(&mut self, _p: &Progress) -> Result<Control, SinkError> {
         Ok(Control::Continue)
     }
-    fn energy(&mut self, _rows: &[EnergyRow]) -> Result<(), SinkError> {
+    fn energy(&mut self, rows: &[EnergyRow]) -> Result<(), SinkError> {
+        if let Some(r) = rows.last() {
+            self.m.fracture_work = r.fracture;
+        }
         Ok(())
     }
     fn crack_tips(&mut self, rows: &[CrackTipRow]) -> Result<(), SinkError> {
-        // The notch runs from the struck edge (tip 0, the mouth) to its tip (tip 1).
-        for r in rows.iter().filter(|r| r.crack == 0 && r.tip == 1) {
+        // The notch runs from the struck edge (tip 0, the mouth) to its tip (tip 1); an
+        // interface's row is its failure front (crack index past the scene's cracks, tip 1).
+        let (crack, tip) = self.target;
+        for r in rows.iter().filter(|r| r.crack == crack && r.tip == tip) {
             self.m.t.push(r.time);
             self.m.len.push(r.length);
             self.m.y.push(r.y);
@@ -201,8 +210,14 @@ impl RunSink for Collect {
     }
 }
 
-pub(super) fn run_one(scene: &Scene, threads: fracture_solver::Parallelism) -> Measured {
+/// Run `scene` and measure the rows of `target` (crack index, tip).
+pub(super) fn run_one(
+    scene: &Scene,
+    threads: fracture_solver::Parallelism,
+    target: (u32, u32),
+) -> Measured {
     let mut sink = Collect {
+        target,
         m: Measured {
             status: RunStatus::Failed,
             message: None,
@@ -220,6 +235,7 @@ pub(super) fn run_one(scene: &Scene, threads: fracture_solver::Parallelism) -> M
             fracture: None,
             fringes: Vec::new(),
             off_material: 0.0,
+            fracture_work: 0.0,
         },
     };
     let opts = RunOptions {
@@ -274,6 +290,7 @@ mod tests {
             fracture: None,
             fringes: Vec::new(),
             off_material: 0.0,
+            fracture_work: 0.0,
         }
     }
 

@@ -14,6 +14,7 @@
 #![allow(clippy::print_stdout)]
 
 mod claims;
+mod cohesive;
 mod figures;
 mod measure;
 mod report;
@@ -82,6 +83,21 @@ pub struct StudyArgs {
     /// a quick check (the 0.125 mm runs are most of the study's time).
     #[arg(long, default_value_t = 1.25e-4)]
     pub min_cell: f64,
+    /// Also run the cohesive part (the bond as a cohesive interface: impact, toughness and
+    /// friction sweeps, cell-size check) and write `rosakis-cohesive.md`.
+    #[arg(long, default_value_t = true, action = clap::ArgAction::Set)]
+    pub cohesive: bool,
+    /// Run only the cohesive part.
+    #[arg(long)]
+    pub cohesive_only: bool,
+    /// The base scene of the cohesive part.
+    #[arg(long, default_value = "scenes/rosakis-shear-cohesive.json")]
+    pub cohesive_scene: PathBuf,
+    /// The smallest cell size (m) of the cohesive cell-size check (the scene's cells, double
+    /// and half of them; 2.5e-4 runs all three for the 0.5 mm scene, the 0.25 mm run is
+    /// most of the cohesive part's time).
+    #[arg(long, default_value_t = 2.5e-4)]
+    pub cohesive_min_cell: f64,
 }
 
 /// The studies of `fracture study`.
@@ -116,14 +132,36 @@ struct Job {
 }
 
 fn rosakis(a: &StudyArgs) -> anyhow::Result<()> {
-    let started = Instant::now();
     anyhow::ensure!(
         a.min_cell.is_finite() && a.min_cell > 0.0,
         "--min-cell must be a positive cell size in metres, got {}",
         a.min_cell
     );
+    anyhow::ensure!(
+        a.cohesive_min_cell.is_finite() && a.cohesive_min_cell > 0.0,
+        "--cohesive-min-cell must be a positive cell size in metres, got {}",
+        a.cohesive_min_cell
+    );
     let figs = a.out.join("rosakis");
     std::fs::create_dir_all(&figs).with_context(|| format!("creating {}", figs.display()))?;
+    if !a.cohesive_only {
+        tip_law_study(a, &figs)?;
+    }
+    if a.cohesive || a.cohesive_only {
+        let page = cohesive::run(&cohesive::Setup {
+            a,
+            scene: &a.cohesive_scene,
+            out: &a.out,
+            figs: &figs,
+        })?;
+        println!("wrote {}", page.display());
+    }
+    Ok(())
+}
+
+/// The seed's sweeps under both tip laws and the convergence tables: `rosakis.md`.
+fn tip_law_study(a: &StudyArgs, figs: &Path) -> anyhow::Result<()> {
+    let started = Instant::now();
     let sweeps = sweeps(a)?;
     let mut bases: HashMap<PathBuf, Value> = HashMap::new();
     let mut jobs: Vec<Job> = Vec::new();
@@ -169,7 +207,7 @@ fn rosakis(a: &StudyArgs) -> anyhow::Result<()> {
         for _ in 0..workers {
             s.spawn(|| {
                 while let Some(job) = jobs.get(next.fetch_add(1, Ordering::Relaxed)) {
-                    let m = run_one(&job.scene, a.threads);
+                    let m = run_one(&job.scene, a.threads, (0, 1));
                     let n = done.fetch_add(1, Ordering::Relaxed) + 1;
                     println!(
                         "[{n}/{total}] {}: {:?}, {:.1} s, {:.2e} particle-steps/s, tip {:.1} mm further",
@@ -202,7 +240,7 @@ fn rosakis(a: &StudyArgs) -> anyhow::Result<()> {
         sweeps: &sweeps,
         results: &results,
         speeds,
-        figs: &figs,
+        figs,
         load: std::fs::read_to_string("/proc/loadavg")
             .ok()
             .and_then(|l| l.split_whitespace().next().map(str::to_string)),

@@ -542,6 +542,7 @@ mod tests {
             len,
             fringes: Vec::new(),
             off_material: 1e-4,
+            fracture_work: 0.0,
         }
     }
 
@@ -565,6 +566,10 @@ mod tests {
             wave_all: true,
             convergence: true,
             min_cell: 1.25e-4,
+            cohesive: false,
+            cohesive_only: false,
+            cohesive_scene: scenes.join("rosakis-shear-cohesive.json"),
+            cohesive_min_cell: 2.5e-4,
         };
         let sweeps = sweeps(&a).expect("the scenes are readable");
         let mut results = HashMap::new();

@@ -123,6 +123,7 @@ pub fn app(state: AppState) -> Router {
             checkpoint::get_checkpoint,
             checkpoint::delete_checkpoint
         ))
+        .routes(routes!(worker::worker_release))
         .layer(DefaultBodyLimit::max(limits.max_worker_body_bytes))
         .layer(Extension(BodyLimit(limits.max_worker_body_bytes)));
     let (router, api) = public.merge(worker).split_for_parts();

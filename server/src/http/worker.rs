@@ -1,6 +1,6 @@
 //! The worker protocol (`/api/v1/worker/…`, worker token): claim (long poll), heartbeat,
-//! history batches, snapshot upload, finish, and the death report of a remote worker's
-//! supervisor. Every write names the claim's fence; a stale
+//! history batches, snapshot upload, finish, the hand-back of a batch worker that must
+//! stop, and the death report of a remote worker's supervisor. Every write names the claim's fence; a stale
 //! one is 409 (`StoreError::Fenced`) and the worker drops the job.
 
 use std::time::Duration;
@@ -12,7 +12,7 @@ use axum::response::{IntoResponse, Response};
 use fracture_api::jobs::{ErrorBody, JobInfo, JobStatus, SnapshotInfo};
 use fracture_api::protocol::{
     Claim, ClaimRequest, CrackTipBatch, EnergyBatch, FinishRequest, Heartbeat, HeartbeatReply,
-    WorkerDied,
+    WorkerDied, WorkerRelease,
 };
 use fracture_results::codec;
 use serde::Deserialize;
@@ -289,5 +289,53 @@ pub(super) async fn worker_died(
     )
     .await?;
     let row = rows.into_iter().next().ok_or(StoreError::Fenced)?;
+    Ok(Json(row.info(false)?))
+}
+
+/// Longest reason or worker name kept in a handed-back job's message (characters).
+const MAX_RELEASE_CHARS: usize = 500;
+
+/// A worker hands its claim back (a batch worker told to stop before its time limit, e.g.
+/// by Slurm's `--signal`): the job returns to the queue without counting the attempt (or
+/// ends cancelled if that was asked), for another worker to run.
+#[utoipa::path(post, path = "/api/v1/worker/jobs/{id}/release", tag = "worker",
+    params(("id" = String, Path, description = "Job id")),
+    request_body(content = WorkerRelease, content_type = "application/json"),
+    responses((status = 200, description = "The job, queued again", body = JobInfo),
+        (status = 401, description = "Missing or wrong worker token", body = ErrorBody),
+        (status = 409, description = "Stale fencing token: the job was already released or finished", body = ErrorBody)),
+    security(("bearer" = [])))]
+pub(super) async fn worker_release(
+    State(st): State<AppState>,
+    _: WorkerToken,
+    Path(id): Path<String>,
+    ApiJson(r): ApiJson<WorkerRelease>,
+) -> Result<Json<JobInfo>, ApiError> {
+    let cut = |s: &str| -> String {
+        let s = s.trim();
+        if s.chars().count() > MAX_RELEASE_CHARS {
+            format!("{}…", s.chars().take(MAX_RELEASE_CHARS).collect::<String>())
+        } else {
+            s.to_string()
+        }
+    };
+    let (reason, worker) = (cut(&r.reason), cut(&r.worker));
+    let mut message = "handed back by its worker".to_string();
+    if !worker.is_empty() {
+        message.push_str(&format!(" {worker}"));
+    }
+    if !reason.is_empty() {
+        message.push_str(&format!(" ({reason})"));
+    }
+    message.push_str("; re-queued without counting the attempt");
+    let row = st.store.hand_back(&id, r.fence, &message).await?;
+    tracing::info!(job = %id, status = row.status.as_str(), worker = %worker, "handed back");
+    if row.status.is_terminal() {
+        let files = st.files.clone();
+        let id = id.clone();
+        let _ = tokio::task::spawn_blocking(move || files.finish(&id)).await;
+    }
+    st.announce(&row);
+    st.queue_changed.notify_waiters();
     Ok(Json(row.info(false)?))
 }

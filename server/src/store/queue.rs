@@ -291,6 +291,39 @@ impl Store {
             .ok_or(StoreError::Fenced)
     }
 
+    /// A worker hands its claim back (a batch worker stopping before its time limit): the
+    /// job returns to the queue without counting the attempt (cancelled instead if that was
+    /// asked), with `message`. Fenced: [`StoreError::Fenced`] when the job is no longer
+    /// running under `fence`.
+    pub async fn hand_back(
+        &self,
+        id: &str,
+        fence: i64,
+        message: &str,
+    ) -> Result<JobRow, StoreError> {
+        let mut tx = self.pool.begin().await?;
+        let row = sqlx::query(
+            "UPDATE jobs SET
+                status = CASE WHEN cancel_requested != 0 THEN 'cancelled' ELSE 'queued' END,
+                finished_at = CASE WHEN cancel_requested != 0
+                                   THEN strftime('%Y-%m-%dT%H:%M:%fZ','now') ELSE NULL END,
+                attempts = MAX(attempts - 1, 0), message = ?,
+                worker_id = NULL, lease_until_ms = NULL
+             WHERE id = ? AND fence = ? AND status = 'running'
+             RETURNING *",
+        )
+        .bind(message)
+        .bind(id)
+        .bind(fence)
+        .fetch_optional(&mut *tx)
+        .await?;
+        tx.commit().await?;
+        row.as_ref()
+            .map(JobRow::decode)
+            .transpose()?
+            .ok_or(StoreError::Fenced)
+    }
+
     /// Put every running job back in the queue without counting the attempt (shutdown of
     /// this server, or recovery at start). Later writes of their workers are fenced off.
     pub async fn release_running(&self, reason: &str) -> Result<Vec<JobRow>, StoreError> {

@@ -78,7 +78,7 @@ impl Store {
         for chunk in rows.chunks(50) {
             let mut q: QueryBuilder<Sqlite> = QueryBuilder::new(
                 "INSERT INTO crack_tips (job_id, time, crack, tip, x, y, length, speed, j1, j2, k1, k2, growing, \
-                 j1_half, j2_half, j1_double, j2_double, k1_cod, k2_cod) ",
+                 j1_half, j2_half, j1_double, j2_double, k1_cod, k2_cod, zone_x, zone_y) ",
             );
             q.push_values(chunk, |mut b, r| {
                 b.push_bind(id)
@@ -99,7 +99,9 @@ impl Store {
                     .push_bind(r.j1_double)
                     .push_bind(r.j2_double)
                     .push_bind(r.k1_cod)
-                    .push_bind(r.k2_cod);
+                    .push_bind(r.k2_cod)
+                    .push_bind(r.zone_x)
+                    .push_bind(r.zone_y);
             });
             q.build().execute(&mut *tx).await?;
         }
@@ -167,7 +169,8 @@ impl Store {
     ) -> Result<Vec<CrackTipRow>, StoreError> {
         let rows = sqlx::query(
             "SELECT time, crack, tip, x, y, length, speed, j1, j2, k1, k2, growing,
-                    j1_half, j2_half, j1_double, j2_double, k1_cod, k2_cod FROM crack_tips
+                    j1_half, j2_half, j1_double, j2_double, k1_cod, k2_cod, zone_x, zone_y
+             FROM crack_tips
              WHERE job_id = ? AND (? IS NULL OR time > ?) ORDER BY rowid",
         )
         .bind(id)
@@ -196,6 +199,8 @@ impl Store {
                     j2_double: real(r, "j2_double")?,
                     k1_cod: real(r, "k1_cod")?,
                     k2_cod: real(r, "k2_cod")?,
+                    zone_x: real(r, "zone_x")?,
+                    zone_y: real(r, "zone_y")?,
                 })
             })
             .collect()

@@ -165,6 +165,7 @@ impl Cracks {
             let k = c.fronts.failure.map_or(0, |(_, k)| k);
             let x = c.pts[k].x;
             let nan = f64::NAN;
+            let zone = c.fronts.zone.map_or([nan, nan], |(_, k)| c.pts[k].x);
             rows.push(CrackTipRow {
                 time,
                 crack: ci as u32,
@@ -184,6 +185,8 @@ impl Cracks {
                 j2_double: nan,
                 k1_cod: nan,
                 k2_cod: nan,
+                zone_x: zone[0],
+                zone_y: zone[1],
             });
         }
         rows

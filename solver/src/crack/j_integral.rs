@@ -390,6 +390,8 @@ impl Cracks {
                     j2_double: tf.j_double[1],
                     k1_cod,
                     k2_cod,
+                    zone_x: f64::NAN,
+                    zone_y: f64::NAN,
                 });
             }
         }
