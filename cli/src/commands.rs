@@ -46,6 +46,14 @@ pub struct WorkerArgs {
     /// the supervisor that `fracture worker` is otherwise (`fracture_worker::supervise`).
     #[arg(long, hide = true)]
     pub supervised_child: bool,
+    /// Checkpoint the running job every this many steps, at the next history sample
+    /// (0: not by steps). A re-claimed job resumes from its last checkpoint.
+    #[arg(long, env = "FRACTURE_CHECKPOINT_STEPS", default_value_t = 0)]
+    pub checkpoint_steps: u64,
+    /// Checkpoint the running job every this many minutes of wall time, at the next history
+    /// sample (0: not by time).
+    #[arg(long, env = "FRACTURE_CHECKPOINT_MINUTES", default_value_t = 5.0)]
+    pub checkpoint_minutes: f64,
     /// Exit (status 0) after this many seconds without a job, e.g. once the queue is
     /// drained (for workers started by a batch scheduler).
     #[arg(long, env = "FRACTURE_IDLE_EXIT", value_parser = parse_seconds, allow_negative_numbers = true)]
@@ -352,6 +360,11 @@ pub fn worker(a: WorkerArgs) -> ExitCode {
         ),
         max_memory: a.max_memory_bytes,
         announce_claims: a.supervised_child,
+        checkpoints: fracture_worker::CheckpointPolicy {
+            steps: (a.checkpoint_steps > 0).then_some(a.checkpoint_steps),
+            every: (a.checkpoint_minutes.is_finite() && a.checkpoint_minutes > 0.0)
+                .then(|| Duration::from_secs_f64(a.checkpoint_minutes * 60.0)),
+        },
         idle_exit: a.idle_exit.map(Duration::from_secs_f64),
         max_jobs: a.max_jobs,
         jobs_before: a.jobs_before,

@@ -13,6 +13,7 @@
 //! are child processes of the `fracture` binary.
 
 pub mod assets;
+pub mod checkpoints;
 pub mod config;
 pub mod error;
 pub mod events;

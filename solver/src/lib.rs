@@ -22,5 +22,6 @@ pub mod sim;
 pub mod tip_mechanics;
 
 pub use sim::{
-    BuildError, Parallelism, Simulation, SolverConfig, StepError, StepStats, WorkCounters,
+    BuildError, CheckpointError, Parallelism, Simulation, SolverConfig, StepError, StepStats,
+    WorkCounters,
 };

@@ -3,7 +3,7 @@
 //! a strip-coloured parallel loop (see `sim`).
 
 /// Position and velocity.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Kin {
     /// Position (m).
     pub x: [f64; 2],
@@ -12,7 +12,7 @@ pub struct Kin {
 }
 
 /// Per-particle mechanical data.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Mech {
     /// Mass (kg, per the scene's thickness).
     pub m: f64,
@@ -29,7 +29,7 @@ pub struct Mech {
 }
 
 /// Cold metadata, read for output and diagnostics only.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Cold {
     /// Initial position (m), for displacements.
     pub x0: [f64; 2],
@@ -40,7 +40,7 @@ pub struct Cold {
 }
 
 /// All particles.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct Particles {
     /// Position and velocity.
     pub kin: Vec<Kin>,
@@ -50,10 +50,14 @@ pub struct Particles {
     pub stress: Vec<[f64; 4]>,
     /// Metadata.
     pub cold: Vec<Cold>,
-    /// Position at the end of the step being computed (scratch of the particle update).
+    /// Position at the end of the step being computed (scratch of the particle update;
+    /// not in checkpoints).
+    #[serde(skip)]
     pub x_next: Vec<[f64; 2]>,
     /// Shape-function weights of the step in progress, computed once in the P2G pass and
     /// reused by the later passes (which must use the same weights, `algorithm.md` pitfall 2).
+    /// Scratch of the step: not in checkpoints.
+    #[serde(skip)]
     pub wts: Vec<crate::shape::Weights2>,
     /// Displacement gradient (∂ux/∂x, ∂ux/∂y, ∂uy/∂x, ∂uy/∂y), accumulated as Σ L·Δt; only
     /// the J-integral needs it, so it is empty (never computed) when the scene has no cracks.

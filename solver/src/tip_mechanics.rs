@@ -8,7 +8,7 @@
 use std::f64::consts::PI;
 
 /// The elastic constants a tip needs, in the scene's 2D state.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct TipMedium {
     /// Shear modulus μ (Pa).
     pub mu: f64,

@@ -9,6 +9,9 @@
 //! * [`LocalOutput`] is the sink of `fracture run`: the files of `run-output.md`.
 //! * [`remote`] is the remote worker: claims jobs from a server over HTTP, heartbeats,
 //!   obeys cancellation and streams the results ([`remote::run_worker`]).
+//! * [`checkpoint`]: a remote job writes checkpoints every N steps or M minutes and when
+//!   it stops to hand its job back ([`Control::HandBack`]); a re-claimed job resumes from
+//!   the last one ([`run_job`]).
 //! * [`supervise`] runs the remote worker loop in a child process and reports the child's
 //!   death (signal, exit status, last lines of stderr) for the job it held.
 //! * [`batch`]: workers of a batch scheduler (Slurm, Kubernetes): stop signals that hand the
@@ -17,6 +20,7 @@
 //! The `fields.mcap` format itself lives in [`fracture_results::mcapfile`].
 
 pub mod batch;
+pub mod checkpoint;
 pub mod handback;
 pub mod local;
 pub mod provenance;
@@ -24,8 +28,9 @@ pub mod remote;
 mod run;
 pub mod supervise;
 
+pub use checkpoint::{CheckpointAt, CheckpointPolicy};
 pub use local::{LocalOutput, LocalOutputError};
-pub use run::run_scene;
+pub use run::{run_job, run_scene};
 
 use std::time::Duration;
 
@@ -77,6 +82,13 @@ pub trait RunSink {
     /// The run is over; called exactly once, also after failures and cancellation (not
     /// after [`Control::HandBack`]: the run is not over).
     fn finish(&mut self, summary: &Summary) -> Result<(), SinkError>;
+    /// A checkpoint of the run ([`checkpoint`]), taken after every row sampled at or before
+    /// `at.time` was given to the sink. A sink that keeps none ignores it. An error is
+    /// logged and the run goes on (the previous checkpoint stays the one to resume from).
+    fn checkpoint(&mut self, bytes: &[u8], at: &CheckpointAt) -> Result<(), SinkError> {
+        let _ = (bytes, at);
+        Ok(())
+    }
 }
 
 /// How a run is driven (not physics).
@@ -113,5 +125,8 @@ impl<S: RunSink + ?Sized> RunSink for &mut S {
     }
     fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
         (**self).finish(summary)
+    }
+    fn checkpoint(&mut self, bytes: &[u8], at: &CheckpointAt) -> Result<(), SinkError> {
+        (**self).checkpoint(bytes, at)
     }
 }

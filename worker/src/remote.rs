@@ -79,6 +79,8 @@ pub struct WorkerConfig {
     /// Tell a supervising parent on stdout which claim this process holds
     /// ([`crate::supervise`]): `HOLDS <job> <fence>` after a claim, `IDLE` when it ends.
     pub announce_claims: bool,
+    /// When a running job is checkpointed (`docs/service.md`, "Checkpoints").
+    pub checkpoints: crate::CheckpointPolicy,
     /// Exit (status 0) after this long without a job (a batch worker gives its node back
     /// once the queue is drained); `None`: never.
     pub idle_exit: Option<Duration>,
@@ -137,6 +139,47 @@ impl Api {
                 .json(body)
                 .send(),
         )
+    }
+
+    fn put_bytes(&self, path: &str, body: Vec<u8>) -> Result<Response, ClientError> {
+        Self::check(
+            self.http
+                .put(self.url(path))
+                .bearer_auth(&self.token)
+                .header(reqwest::header::CONTENT_TYPE, "application/octet-stream")
+                .body(body)
+                .send(),
+        )
+    }
+
+    /// The job's checkpoint (None: it has none).
+    fn get_checkpoint(&self, job: &str, fence: i64) -> Result<Option<Vec<u8>>, ClientError> {
+        let r = self
+            .http
+            .get(self.url(&format!("jobs/{job}/checkpoint?fence={fence}")))
+            .bearer_auth(&self.token)
+            .send();
+        if let Ok(resp) = &r
+            && resp.status() == StatusCode::NOT_FOUND
+        {
+            return Ok(None);
+        }
+        let bytes = Self::check(r)?
+            .bytes()
+            .map_err(|e| ClientError::Transient(e.to_string()))?;
+        Ok(Some(bytes.to_vec()))
+    }
+
+    /// Refuse the job's checkpoint: the server drops it and the history after step 0, and
+    /// the run starts over.
+    fn refuse_checkpoint(&self, job: &str, fence: i64) -> Result<(), ClientError> {
+        Self::check(
+            self.http
+                .delete(self.url(&format!("jobs/{job}/checkpoint?fence={fence}")))
+                .bearer_auth(&self.token)
+                .send(),
+        )
+        .map(drop)
     }
 
     fn post_bytes(&self, path: &str, body: Vec<u8>) -> Result<Response, ClientError> {
@@ -384,7 +427,7 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) -> bool {
                             threads: cfg.threads,
                             flush_every: cfg.flush_every,
                         };
-                        crate::run_scene(&valid, &opts, &mut sink)
+                        run_resumable(api, cfg, &job, fence, &valid, &opts, &mut sink)
                     }
                 }
             }
@@ -463,6 +506,58 @@ fn hand_back(api: &Api, cfg: &WorkerConfig, job: &str, fence: i64, step: Option<
             error = %e,
             "cannot hand the job back; the server will find it by its lease"
         ),
+    }
+}
+
+/// Run a claimed job, from its checkpoint when the server has one this build can use; a
+/// checkpoint it refuses is dropped on the server (with the history after step 0) and the
+/// run starts over.
+fn run_resumable(
+    api: &Api,
+    cfg: &WorkerConfig,
+    job: &str,
+    fence: i64,
+    valid: &ValidScene,
+    opts: &RunOptions,
+    sink: &mut HttpSink<'_>,
+) -> Summary {
+    let policy = cfg.checkpoints;
+    let fetched = api.retry(HttpSink::BUDGET, || api.get_checkpoint(job, fence));
+    let bytes = match fetched {
+        Ok(b) => b,
+        Err(e) => {
+            // Without it the run cannot start at the history the server kept.
+            tracing::warn!(job = %job, error = %e, "cannot fetch the checkpoint");
+            if api.refuse_checkpoint(job, fence).is_err() {
+                return failed_summary(
+                    Some(valid.scene()),
+                    FailureKind::Output,
+                    format!("could not fetch or drop the job's checkpoint: {e}"),
+                );
+            }
+            None
+        }
+    };
+    if let Some(b) = bytes {
+        match crate::run_job(valid, opts, policy, Some(&b), sink) {
+            Ok(s) => return s,
+            Err(why) => {
+                tracing::warn!(job = %job, reason = %why, "checkpoint refused; starting over from step 0");
+                if let Err(e) = api.retry(HttpSink::BUDGET, || api.refuse_checkpoint(job, fence)) {
+                    return failed_summary(
+                        Some(valid.scene()),
+                        FailureKind::Output,
+                        format!(
+                            "the job's checkpoint was refused ({why}) and could not be dropped: {e}"
+                        ),
+                    );
+                }
+            }
+        }
+    }
+    match crate::run_job(valid, opts, policy, None, sink) {
+        Ok(s) => s,
+        Err(e) => failed_summary(Some(valid.scene()), FailureKind::Output, e),
     }
 }
 
@@ -639,6 +734,21 @@ impl RunSink for HttpSink<'_> {
         self.api
             .retry(Self::BUDGET, || {
                 self.api.post_bytes(&path, body.clone()).map(drop)
+            })
+            .map_err(|e| self.fail(e))
+    }
+
+    fn checkpoint(&mut self, bytes: &[u8], at: &crate::CheckpointAt) -> Result<(), SinkError> {
+        self.guard()?;
+        // Rust's `{}` of an f64 is its shortest round-trip text: the server reads the
+        // same bits.
+        let path = format!(
+            "jobs/{}/checkpoint?fence={}&step={}&time={}&snapshots={}",
+            self.job, self.fence, at.step, at.time, at.snapshots
+        );
+        self.api
+            .retry(Self::BUDGET, || {
+                self.api.put_bytes(&path, bytes.to_vec()).map(drop)
             })
             .map_err(|e| self.fail(e))
     }

@@ -14,6 +14,7 @@ use fracture_api::scene::FieldKind;
 use fracture_api::{Scene, ValidScene};
 use fracture_solver::{Simulation, SolverConfig, StepError, StepStats};
 
+use crate::checkpoint::{CheckpointAt, CheckpointPolicy, LoopCursor};
 use crate::{Control, RunOptions, RunSink, SinkError};
 
 /// What the run loop needs from a simulation. Implemented by
@@ -34,6 +35,10 @@ pub(crate) trait Model {
     fn snapshot(&self, index: u32, fields: &[FieldKind]) -> Snapshot;
     /// The fracture-energy report of growing tips (None without growth).
     fn fracture_energy(&self) -> Option<FractureEnergy> {
+        None
+    }
+    /// The solver's checkpoint (None: this model keeps none).
+    fn checkpoint(&self) -> Option<Vec<u8>> {
         None
     }
 }
@@ -78,6 +83,9 @@ impl Model for Simulation {
     fn fracture_energy(&self) -> Option<FractureEnergy> {
         Simulation::fracture_energy(self)
     }
+    fn checkpoint(&self) -> Option<Vec<u8>> {
+        Some(Simulation::checkpoint(self))
+    }
 }
 
 /// Run a scene to its end time, sending results to `sink`, and return the summary (also
@@ -100,7 +108,7 @@ pub fn run_scene(scene: &ValidScene, opts: &RunOptions, sink: &mut dyn RunSink) 
     };
     let built = catch_unwind(AssertUnwindSafe(|| Simulation::new(scene, config)));
     match built {
-        Ok(Ok(mut sim)) => run_model(&mut sim, scene, opts, sink),
+        Ok(Ok(mut sim)) => run_model(&mut sim, scene, opts, CheckpointPolicy::none(), None, sink),
         Ok(Err(e)) => finish_early(
             scene,
             sink,
@@ -117,6 +125,50 @@ pub fn run_scene(scene: &ValidScene, opts: &RunOptions, sink: &mut dyn RunSink) 
             ),
         ),
     }
+}
+
+/// Run a job: like [`run_scene`], writing checkpoints by `policy` (and when a hand back is
+/// requested, [`crate::handback`], after which the run stops and is handed back), and
+/// resuming from `checkpoint` when one is given. A checkpoint that cannot be used (corrupt,
+/// of another scene or build) is refused before anything is sent: `Err` with the reason, and
+/// the caller starts over from step 0.
+pub fn run_job(
+    scene: &ValidScene,
+    opts: &RunOptions,
+    policy: CheckpointPolicy,
+    checkpoint: Option<&[u8]>,
+    sink: &mut dyn RunSink,
+) -> Result<Summary, String> {
+    let Some(bytes) = checkpoint else {
+        let config = SolverConfig {
+            threads: opts.threads,
+        };
+        let built = catch_unwind(AssertUnwindSafe(|| Simulation::new(scene, config)));
+        return Ok(match built {
+            Ok(Ok(mut sim)) => run_model(&mut sim, scene, opts, policy, None, sink),
+            _ => run_scene(scene, opts, sink),
+        });
+    };
+    let d = crate::checkpoint::decode(bytes, &scene.scene().hash())?;
+    let config = SolverConfig {
+        threads: opts.threads,
+    };
+    let mut sim = catch_unwind(AssertUnwindSafe(|| {
+        Simulation::restore(scene, config, &d.solver)
+    }))
+    .map_err(|p| format!("solver panicked restoring it: {}", panic_message(&*p)))?
+    .map_err(|e| e.to_string())?;
+    if sim.steps_taken() != d.at.step || sim.time().to_bits() != d.at.time.to_bits() {
+        return Err("the solver state is not at the checkpoint's step".into());
+    }
+    Ok(run_model(
+        &mut sim,
+        scene,
+        opts,
+        policy,
+        Some(d.cursor),
+        sink,
+    ))
 }
 
 fn base_summary(scene: &Scene) -> Summary {
@@ -275,6 +327,41 @@ impl<M: Model> Loop<'_, M> {
         Ok(())
     }
 
+    /// Write a checkpoint now: flush the rows sampled so far (the checkpoint covers them),
+    /// take the solver's checkpoint, hand it to the sink. A checkpoint that cannot be taken
+    /// or stored is logged and the run goes on; only a sink error on the flush stops it.
+    fn checkpoint_now(&mut self, scene_hash: &str, cursor: LoopCursor) -> Result<(), Stop> {
+        self.flush().map_err(Stop::Sink)?;
+        let model = &*self.model;
+        let Ok(Some(solver)) = catch_unwind(AssertUnwindSafe(|| model.checkpoint())) else {
+            tracing::warn!("the solver gave no checkpoint");
+            return Ok(());
+        };
+        let at = CheckpointAt {
+            step: model.steps_taken(),
+            time: model.time(),
+            snapshots: self.snapshots,
+        };
+        let t0 = Instant::now();
+        match crate::checkpoint::encode(scene_hash, at.step, at.time, cursor, solver) {
+            Ok(bytes) => {
+                let encoded = t0.elapsed();
+                match self.sink.checkpoint(&bytes, &at) {
+                    Ok(()) => tracing::info!(
+                        step = at.step,
+                        bytes = bytes.len(),
+                        encode_ms = encoded.as_secs_f64() * 1e3,
+                        total_ms = t0.elapsed().as_secs_f64() * 1e3,
+                        "checkpoint written"
+                    ),
+                    Err(e) => tracing::warn!(step = at.step, error = %e, "checkpoint not stored"),
+                }
+            }
+            Err(e) => tracing::warn!(error = %e, "checkpoint not encoded"),
+        }
+        Ok(())
+    }
+
     fn progress(&self) -> Progress {
         let t = self.model.time();
         let end = self.model.end_time();
@@ -299,6 +386,8 @@ pub(crate) fn run_model<M: Model>(
     model: &mut M,
     scene: &Scene,
     opts: &RunOptions,
+    policy: CheckpointPolicy,
+    resume: Option<LoopCursor>,
     sink: &mut dyn RunSink,
 ) -> Summary {
     let mut summary = base_summary(scene);
@@ -326,14 +415,28 @@ pub(crate) fn run_model<M: Model>(
     let mut last_report = start;
     let mut active_sum = 0.0_f64;
     let mut active_steps = 0u64;
+    let mut wall_before = 0.0_f64;
+    if let Some(c) = resume {
+        history.next = c.history_next;
+        snapshots.next = c.snapshot_next;
+        lp.snapshots = c.snapshots;
+        lp.sampled_at = c.sampled_at;
+        active_sum = c.active_sum;
+        active_steps = c.active_steps;
+        wall_before = c.wall_seconds;
+    }
+    let hash = scene.hash();
+    let mut last_checkpoint = (lp.model.steps_taken(), start);
 
     let result: Result<(), Stop> = (|| {
         let dt = lp.model.time_step();
-        // t = 0.
-        lp.sample()?;
-        history.due(lp.model.time(), dt);
-        if snapshot_interval.is_some() && snapshots.due(lp.model.time(), dt) {
-            lp.snapshot()?;
+        // t = 0 (a resumed run sampled it before).
+        if resume.is_none() {
+            lp.sample()?;
+            history.due(lp.model.time(), dt);
+            if snapshot_interval.is_some() && snapshots.due(lp.model.time(), dt) {
+                lp.snapshot()?;
+            }
         }
         while !lp.model.is_finished() {
             let model = &mut *lp.model;
@@ -351,11 +454,29 @@ pub(crate) fn run_model<M: Model>(
             active_sum += stats.active_nodes as f64;
             active_steps += 1;
             let t = lp.model.time();
-            if history.due(t, dt) {
+            let sampled = history.due(t, dt);
+            if sampled {
                 lp.sample()?;
             }
             if snapshot_interval.is_some() && snapshots.due(t, dt) {
                 lp.snapshot()?;
+            }
+            // The loop's cursor, for a checkpoint taken now.
+            let cursor = |history: &Cadence, snapshots: &Cadence, lp: &Loop<'_, M>| LoopCursor {
+                history_next: history.next,
+                snapshot_next: snapshots.next,
+                snapshots: lp.snapshots,
+                sampled_at: lp.sampled_at,
+                active_sum,
+                active_steps,
+                wall_seconds: wall_before + start.elapsed().as_secs_f64(),
+            };
+            // Checkpoints by the policy, at a history sample.
+            let steps = lp.model.steps_taken();
+            if sampled && policy.due(steps - last_checkpoint.0, last_checkpoint.1.elapsed()) {
+                let c = cursor(&history, &snapshots, &lp);
+                lp.checkpoint_now(&hash, c)?;
+                last_checkpoint = (steps, Instant::now());
             }
             if last_report.elapsed() >= opts.flush_every {
                 last_report = Instant::now();
@@ -367,13 +488,19 @@ pub(crate) fn run_model<M: Model>(
                     // The job goes back to the queue unfinished. Checkpoint: a checkpoint of
                     // the state at this step is written here, before the loop returns (the
                     // caller releases the job after `run_scene` returns).
-                    Control::HandBack => return Err(Stop::HandedBack),
+                    Control::HandBack => {
+                        if policy.enabled() {
+                            let c = cursor(&history, &snapshots, &lp);
+                            lp.checkpoint_now(&hash, c)?;
+                        }
+                        return Err(Stop::HandedBack);
+                    }
                 }
             }
         }
         Ok(())
     })();
-    let wall = start.elapsed().as_secs_f64();
+    let wall = wall_before + start.elapsed().as_secs_f64();
     let handed_back = matches!(result, Err(Stop::HandedBack));
 
     // One final sample where the last step was not sampled (also after a failure: the
@@ -533,6 +660,9 @@ mod tests {
         fn is_finished(&self) -> bool {
             self.taken >= self.n
         }
+        fn checkpoint(&self) -> Option<Vec<u8>> {
+            Some(self.taken.to_le_bytes().to_vec())
+        }
         fn particle_count(&self) -> usize {
             100
         }
@@ -587,14 +717,18 @@ mod tests {
         energy_batches: usize,
         /// Order of calls, to check flush-before-progress.
         log: Vec<&'static str>,
+        checkpoints: Vec<(CheckpointAt, Vec<u8>)>,
+        /// Answer HandBack from this progress call on (0-based).
+        hand_back_at: Option<usize>,
     }
 
     impl RunSink for Record {
         fn progress(&mut self, p: &Progress) -> Result<Control, SinkError> {
             self.log.push("progress");
             self.progress.push(*p);
-            Ok(match self.cancel_at {
-                Some(k) if self.progress.len() > k => Control::Cancel,
+            Ok(match (self.cancel_at, self.hand_back_at) {
+                (Some(k), _) if self.progress.len() > k => Control::Cancel,
+                (_, Some(k)) if self.progress.len() > k => Control::HandBack,
                 _ => Control::Continue,
             })
         }
@@ -621,6 +755,11 @@ mod tests {
         fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
             self.log.push("finish");
             self.finished.push(summary.clone());
+            Ok(())
+        }
+        fn checkpoint(&mut self, bytes: &[u8], at: &CheckpointAt) -> Result<(), SinkError> {
+            self.log.push("checkpoint");
+            self.checkpoints.push((*at, bytes.to_vec()));
             Ok(())
         }
     }
@@ -651,7 +790,14 @@ mod tests {
         // 10 (1.0); snapshots every 0.5 → steps 0, 5, 10.
         let mut m = Fake::new(10, 0.1);
         let mut sink = Record::default();
-        let s = run_model(&mut m, &scene(Some(0.25), 0.5), &opts(0), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(Some(0.25), 0.5),
+            &opts(0),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Completed, "{s:?}");
         assert_eq!(s.message, None);
         let times: Vec<u64> = sink.energy.iter().map(|e| e.kinetic as u64).collect();
@@ -691,7 +837,14 @@ mod tests {
     fn every_step_without_history_interval_and_no_snapshots_at_zero() {
         let mut m = Fake::new(7, 0.1);
         let mut sink = Record::default();
-        let s = run_model(&mut m, &scene(None, 0.0), &opts(3_600_000), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(None, 0.0),
+            &opts(3_600_000),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Completed);
         assert_eq!(sink.energy.len(), 8, "t = 0 and each of 7 steps");
         assert!(sink.snapshots.is_empty());
@@ -704,7 +857,14 @@ mod tests {
     fn rows_are_flushed_before_each_progress_report() {
         let mut m = Fake::new(20, 0.1);
         let mut sink = Record::default();
-        run_model(&mut m, &scene(None, 0.0), &opts(0), &mut sink);
+        run_model(
+            &mut m,
+            &scene(None, 0.0),
+            &opts(0),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(
             sink.progress.len(),
             21,
@@ -729,7 +889,14 @@ mod tests {
             cancel_at: Some(2),
             ..Default::default()
         };
-        let s = run_model(&mut m, &scene(None, 0.0), &opts(0), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(None, 0.0),
+            &opts(0),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Cancelled);
         assert_eq!(s.steps, 3);
         assert!(s.message.is_some());
@@ -766,7 +933,14 @@ mod tests {
         }
         let mut m = Fake::new(1000, 0.1);
         let mut sink = HandBackAt(Record::default(), 2);
-        let s = run_model(&mut m, &scene(None, 0.0), &opts(0), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(None, 0.0),
+            &opts(0),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Cancelled);
         assert_eq!(s.steps, 3);
         assert_eq!(s.message.as_deref(), Some("handed back at step 3"));
@@ -784,7 +958,14 @@ mod tests {
         let mut m = Fake::new(100, 0.1);
         m.fail_at = Some(6);
         let mut sink = Record::default();
-        let s = run_model(&mut m, &scene(Some(0.25), 0.0), &opts(3_600_000), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(Some(0.25), 0.0),
+            &opts(3_600_000),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Failed);
         assert_eq!(
             s.message.as_deref(),
@@ -806,7 +987,14 @@ mod tests {
         let mut m = Fake::new(100, 0.1);
         m.panic_at = Some(4);
         let mut sink = Record::default();
-        let s = run_model(&mut m, &scene(None, 0.0), &opts(3_600_000), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(None, 0.0),
+            &opts(3_600_000),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Failed);
         let msg = s.message.unwrap();
         assert!(msg.contains("panicked in step 4"), "{msg}");
@@ -822,7 +1010,14 @@ mod tests {
             fail_energy_at: Some(1),
             ..Default::default()
         };
-        let s = run_model(&mut m, &scene(None, 0.0), &opts(0), &mut sink);
+        let s = run_model(
+            &mut m,
+            &scene(None, 0.0),
+            &opts(0),
+            CheckpointPolicy::none(),
+            None,
+            &mut sink,
+        );
         assert_eq!(s.status, RunStatus::Failed);
         assert_eq!(
             s.message.as_deref(),
@@ -840,5 +1035,65 @@ mod tests {
         let n = 3;
         let p = std::panic::catch_unwind(|| panic!("formatted {n}")).unwrap_err();
         assert_eq!(panic_message(&*p), "formatted 3");
+    }
+
+    /// Checkpoints by steps come at history samples, after the rows sampled so far were
+    /// given to the sink, with the loop's cursor; a hand back checkpoints at once and stops
+    /// the run without finishing it.
+    #[test]
+    fn checkpoints_follow_the_policy_and_a_hand_back_stops_the_run() {
+        let policy = CheckpointPolicy {
+            steps: Some(3),
+            every: None,
+        };
+        let mut m = Fake::new(10, 0.1);
+        let mut sink = Record::default();
+        let s = run_model(
+            &mut m,
+            &scene(Some(0.2), 0.0),
+            &opts(3_600_000),
+            policy,
+            None,
+            &mut sink,
+        );
+        assert_eq!(s.status, RunStatus::Completed);
+        // Samples at steps 2, 4, 6, 8, 10: due after 3 steps → at 4 and 8.
+        let steps: Vec<u64> = sink.checkpoints.iter().map(|c| c.0.step).collect();
+        assert_eq!(steps, vec![4, 8]);
+        for (at, bytes) in &sink.checkpoints {
+            let d = crate::checkpoint::decode(bytes, &scene(Some(0.2), 0.0).hash()).unwrap();
+            assert_eq!(d.solver, at.step.to_le_bytes().to_vec());
+            assert_eq!(d.cursor.sampled_at, Some(at.step));
+        }
+        let first = sink.log.iter().position(|l| *l == "checkpoint").unwrap();
+        assert_eq!(sink.log[first - 1], "crack_tips", "{:?}", sink.log);
+        assert!(sink.energy.iter().any(|r| (r.time - 0.4).abs() < 1e-9));
+
+        let mut m = Fake::new(10, 0.1);
+        let mut sink = Record {
+            hand_back_at: Some(0),
+            ..Record::default()
+        };
+        let policy = CheckpointPolicy {
+            steps: Some(1000),
+            every: None,
+        };
+        let s = run_model(
+            &mut m,
+            &scene(Some(0.2), 0.0),
+            &opts(0),
+            policy,
+            None,
+            &mut sink,
+        );
+        assert_eq!(s.status, RunStatus::Cancelled);
+        assert_eq!(s.steps, 1);
+        assert!(
+            sink.finished.is_empty(),
+            "a handed-back run is not finished"
+        );
+        assert_eq!(sink.checkpoints.len(), 1);
+        assert_eq!(sink.checkpoints[0].0.step, 1);
+        assert_eq!(sink.log.last(), Some(&"checkpoint"));
     }
 }

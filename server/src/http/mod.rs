@@ -28,6 +28,7 @@ use crate::server::AppState;
 use crate::store::JobRow;
 
 pub mod auth;
+mod checkpoint;
 mod events;
 mod jobs;
 mod meta;
@@ -117,6 +118,11 @@ pub fn app(state: AppState) -> Router {
         .routes(routes!(worker::worker_snapshot))
         .routes(routes!(worker::worker_finish))
         .routes(routes!(worker::worker_died))
+        .routes(routes!(
+            checkpoint::put_checkpoint,
+            checkpoint::get_checkpoint,
+            checkpoint::delete_checkpoint
+        ))
         .routes(routes!(worker::worker_release))
         .layer(DefaultBodyLimit::max(limits.max_worker_body_bytes))
         .layer(Extension(BodyLimit(limits.max_worker_body_bytes)));

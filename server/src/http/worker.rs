@@ -9,7 +9,6 @@ use axum::Json;
 use axum::extract::{Path, State};
 use axum::http::StatusCode;
 use axum::response::{IntoResponse, Response};
-use fracture_api::Scene;
 use fracture_api::jobs::{ErrorBody, JobInfo, JobStatus, SnapshotInfo};
 use fracture_api::protocol::{
     Claim, ClaimRequest, CrackTipBatch, EnergyBatch, FinishRequest, Heartbeat, HeartbeatReply,
@@ -48,18 +47,16 @@ pub(super) async fn worker_claim(
         let notified = st.queue_changed.notified();
         if let Some(c) = st.store.claim(&req.worker_id, st.cfg.lease).await? {
             let job = c.job;
-            let files = st.files.clone();
-            let (jid, fence, text) = (job.id.clone(), job.fence, job.scene.clone());
-            let scene: serde_json::Value = blocking(move || {
-                // The file records the scene when this version can read it; one it cannot
-                // still goes to the worker, which fails the job with the diagnosis.
-                // A file that cannot be created (a full disk) is given up, not the claim:
-                // the run's rows go to the database all the same.
-                let typed: Option<Scene> = serde_json::from_str(&text).ok();
-                let _ = files.start(&jid, fence, typed.as_ref());
-                serde_json::from_str(&text).map_err(ApiError::internal)
-            })
-            .await?;
+            // The history of earlier attempts, kept up to the job's checkpoint (dropped
+            // without one), and the MCAP file restarted with it (`checkpoint.rs`). A file
+            // that cannot be created (a full disk) is given up, not the claim: the run's
+            // rows go to the database all the same.
+            super::checkpoint::start_claim(&st, &job.id, job.fence, &job.scene).await?;
+            let text = job.scene.clone();
+            // A scene this version cannot read still goes to the worker, which fails the
+            // job with the diagnosis.
+            let scene: serde_json::Value =
+                blocking(move || serde_json::from_str(&text).map_err(ApiError::internal)).await?;
             tracing::info!(job = %job.id, worker = %req.worker_id, attempt = job.attempts, "claimed");
             st.announce(&job);
             return Ok(Json(Claim {
@@ -244,6 +241,8 @@ pub(super) async fn worker_finish(
     })
     .await?;
     let row = st.store.finish(&id, f.fence, &f.summary).await?;
+    // The run is over: nothing will resume from its checkpoint.
+    super::checkpoint::remove_after_finish(&st, &id).await;
     tracing::info!(job = %id, status = row.status.as_str(), "finished");
     st.announce(&row);
     st.queue_changed.notify_waiters();

@@ -44,7 +44,7 @@ mod results;
 mod sweeps;
 
 pub use jobs::{JobRow, ListFilter, NewJob, RunningJob, StoreMetrics};
-pub use queue::Claimed;
+pub use queue::{Claimed, HistoryCursor};
 pub use sweeps::{NewSweep, NewSweepJob, SweepRow};
 
 /// Errors of the store.

@@ -21,6 +21,17 @@ const RELEASE: &str = "UPDATE jobs SET
                        THEN strftime('%Y-%m-%dT%H:%M:%fZ','now') ELSE NULL END,
     worker_id = NULL, lease_until_ms = NULL";
 
+/// Where a resumed job's history continues (its checkpoint's position).
+#[derive(Debug, Clone, Copy, PartialEq)]
+pub struct HistoryCursor {
+    /// Steps taken at the checkpoint.
+    pub step: u64,
+    /// Simulated time of the checkpoint (s): rows at later times are deleted.
+    pub time: f64,
+    /// Snapshots taken by then: snapshots with this index or more are deleted.
+    pub snapshots: u32,
+}
+
 /// A successful claim.
 #[derive(Debug, Clone)]
 pub struct Claimed {
@@ -31,7 +42,8 @@ pub struct Claimed {
 impl Store {
     /// Claim the best queued job (highest priority, then oldest) for `worker`, with a lease,
     /// skipping the jobs of a sweep that has `max_concurrent` of its jobs running.
-    /// A job claimed again (after a lost worker) loses the previous attempt's rows.
+    /// The claim's history is set by [`Store::rewind_history`] (called by the claim route
+    /// before it answers: a re-claimed job keeps only what its checkpoint covers).
     pub async fn claim(
         &self,
         worker: &str,
@@ -57,11 +69,53 @@ impl Store {
         .fetch_optional(&mut *tx)
         .await?;
         let job = row.as_ref().map(JobRow::decode).transpose()?;
-        if let Some(j) = &job {
-            delete_job_rows(&mut tx, &j.id).await?;
-        }
         tx.commit().await?;
         Ok(job.map(|job| Claimed { job }))
+    }
+
+    /// The history a new claim under `fence` starts from: the rows and snapshots of earlier
+    /// attempts are deleted, all of them, or with a checkpoint to resume from only those
+    /// after it (`keep`: rows at times ≤ `time` and snapshots with index < `snapshots`
+    /// stay). With a checkpoint, the job's message says where it resumes. Fenced.
+    pub async fn rewind_history(
+        &self,
+        id: &str,
+        fence: i64,
+        lease: Duration,
+        keep: Option<HistoryCursor>,
+    ) -> Result<(), StoreError> {
+        let mut tx = self.pool.begin().await?;
+        Self::fence_check(&mut tx, id, fence, lease).await?;
+        match keep {
+            None => delete_job_rows(&mut tx, id).await?,
+            Some(k) => {
+                for sql in [
+                    "DELETE FROM energy WHERE job_id = ? AND time > ?",
+                    "DELETE FROM crack_tips WHERE job_id = ? AND time > ?",
+                ] {
+                    sqlx::query(sql)
+                        .bind(id)
+                        .bind(k.time)
+                        .execute(&mut *tx)
+                        .await?;
+                }
+                sqlx::query("DELETE FROM snapshots WHERE job_id = ? AND idx >= ?")
+                    .bind(id)
+                    .bind(i64::from(k.snapshots))
+                    .execute(&mut *tx)
+                    .await?;
+                sqlx::query("UPDATE jobs SET message = ? WHERE id = ?")
+                    .bind(format!(
+                        "resumed from its checkpoint at step {} (t = {:e} s)",
+                        k.step, k.time
+                    ))
+                    .bind(id)
+                    .execute(&mut *tx)
+                    .await?;
+            }
+        }
+        tx.commit().await?;
+        Ok(())
     }
 
     /// Extend the lease of a job running under `fence` (the first statement of a fenced

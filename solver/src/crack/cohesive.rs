@@ -19,7 +19,7 @@ use super::geometry::dist;
 use super::{Cracks, Fronts};
 
 /// The cohesive state of one interface point.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Bond {
     /// The law's shape.
     pub law: CohesiveLaw,

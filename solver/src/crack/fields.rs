@@ -21,7 +21,7 @@ pub(super) type FieldEntry = (u32, u32, i32, [f64; 2]);
 pub(super) type ChunkEntries = (Vec<FieldEntry>, Option<(usize, u32)>);
 
 /// Field-1 node record: which side field 1 holds, the contact normal, the crack.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct SlotInfo {
     /// Field 1 holds the particles above (left of) the crack.
     pub above_is_f1: bool,

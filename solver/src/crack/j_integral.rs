@@ -27,7 +27,7 @@ struct TipJ {
 }
 
 /// What one evaluation at a tip gives (global components), cached per sample time.
-#[derive(Debug, Clone, Copy)]
+#[derive(Debug, Clone, Copy, serde::Serialize, serde::Deserialize)]
 pub(super) struct TipEval {
     /// J by the crack's method; NaN where not defined.
     j: [f64; 2],

@@ -61,7 +61,7 @@ use fields::{ChunkEntries, FieldEntry};
 use geometry::{dist, norm, sub};
 
 /// A point of a crack: its line position and its two surfaces.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct CrackPoint {
     /// Position of the crack line.
     pub x: [f64; 2],
@@ -97,7 +97,7 @@ impl CrackPoint {
 }
 
 /// State of one end of a crack.
-#[derive(Debug, Clone, Default)]
+#[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]
 pub struct TipState {
     /// A real tip (false for a mouth, or a tip that has cut through the body).
     pub active: bool,
@@ -124,15 +124,19 @@ pub struct TipState {
 }
 
 /// One crack.
-#[derive(Debug, Clone)]
+#[derive(Debug, Clone, serde::Serialize, serde::Deserialize)]
 pub struct Crack {
     /// Points from the start (tip 0) to the end (tip 1).
     pub pts: Vec<CrackPoint>,
     /// Tip 0 and tip 1.
     pub tips: [TipState; 2],
+    // The scene's laws: not in checkpoints (internally tagged, and the scene gives them).
+    #[serde(skip)]
     contact: ContactLaw,
+    #[serde(skip)]
     propagation: Propagation,
     /// How J is evaluated (domain or contour).
+    #[serde(skip, default = "default_j_method")]
     j_method: JIntegral,
     /// Length added at each end by the mouth extension (not reported).
     ext: [f64; 2],
@@ -147,7 +151,7 @@ pub struct Crack {
 
 /// The fronts of a cohesive interface, as distances along it from its first point (m) and
 /// the index of the crack point there.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Fronts {
     /// Farthest fully failed point, connected to a crack or not.
     pub failure: Option<(f64, usize)>,
@@ -213,7 +217,9 @@ impl Crack {
     }
 }
 
-/// All cracks of a scene, with the scratch the crack steps reuse.
+/// All cracks of a scene, with the scratch the crack steps reuse. Serialized for checkpoints
+/// (`sim/checkpoint.rs`) without the scratch (`#[serde(skip)]`, taken from a fresh build).
+#[derive(serde::Serialize, serde::Deserialize)]
 pub struct Cracks {
     /// The cracks.
     pub cracks: Vec<Crack>,
@@ -224,10 +230,14 @@ pub struct Cracks {
     thickness: f64,
     speed_window: f64,
     // Broad phase: segments (crack, segment) registered per cell, CSR.
+    #[serde(skip)]
     cell_start: Vec<u32>,
+    #[serde(skip)]
     cell_segs: Vec<(u32, u32)>,
+    #[serde(skip)]
     entries: Vec<FieldEntry>,
     /// Per-chunk entries and first error of the parallel mask pass.
+    #[serde(skip)]
     chunk_entries: Vec<ChunkEntries>,
     /// Normal contact impulse |Δp_n| of the last force-stage contact at each node (dense over
     /// grid storage): the friction capacity of faces that are in contact but not approaching
@@ -246,6 +256,11 @@ pub struct Cracks {
     zone_work: f64,
     /// Time step (s).
     dt: f64,
+}
+
+/// Placeholder of a checkpoint's skipped J method (the scene's is put back on restore).
+fn default_j_method() -> JIntegral {
+    JIntegral::Domain { radius: 0.0 }
 }
 
 /// Distance from x to a polyline (m).
@@ -418,6 +433,34 @@ impl Cracks {
             zone_work: 0.0,
             dt: scene_dt,
         }
+    }
+
+    /// Put back into cracks restored from a checkpoint what checkpoints leave out (each
+    /// crack's laws from the scene, via a fresh build), and check that the state fits this
+    /// scene's grid and materials. Returns what does not fit.
+    pub(crate) fn adopt_scene(&mut self, fresh: &Cracks) -> Result<(), String> {
+        if self.cracks.len() != fresh.cracks.len() {
+            return Err(format!(
+                "{} cracks and interfaces, the scene has {}",
+                self.cracks.len(),
+                fresh.cracks.len()
+            ));
+        }
+        if self.normal_impulse.len() != fresh.normal_impulse.len()
+            || self.media.len() != fresh.media.len()
+            || (self.ncx, self.ncy) != (fresh.ncx, fresh.ncy)
+        {
+            return Err("crack tables of another grid or material set".into());
+        }
+        for (c, f) in self.cracks.iter_mut().zip(&fresh.cracks) {
+            if c.pts.len() < 2 || c.interface != f.interface {
+                return Err("a crack of another kind or with fewer than 2 points".into());
+            }
+            c.contact = f.contact.clone();
+            c.propagation = f.propagation.clone();
+            c.j_method = f.j_method;
+        }
+        Ok(())
     }
 
     /// Energy the process-zone tractions have removed so far (J, the scene's thickness).

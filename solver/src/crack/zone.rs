@@ -37,7 +37,7 @@ use super::geometry::crosses;
 use super::{CrackPoint, Cracks};
 
 /// Traction–separation state of one crack point.
-#[derive(Debug, Clone, Copy, PartialEq)]
+#[derive(Debug, Clone, Copy, PartialEq, serde::Serialize, serde::Deserialize)]
 pub struct Zone {
     /// Peak traction σ_c (Pa).
     pub strength: f64,

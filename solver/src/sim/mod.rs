@@ -11,7 +11,7 @@
 //! 4. Velocity gradient from the re-extrapolated momenta, second stress half-update.
 //!
 //! This file holds the [`Simulation`] state and the step's order. The sections live in:
-//! `config` (threads), `errors` (build and step errors, first failure of a pass), `build`
+//! `config` (threads), `checkpoint` (the persistent state as bytes, and back), `errors` (build and step errors, first failure of a pass), `build`
 //! ([`Simulation::new`]), `sort` (particles by cell), `stencil` (the 3×3 node visits of one
 //! particle: field-0 fast path and generic multi-field path), `transfer` (the four particle
 //! passes, each written once over a stencil), `grid_update` (nodal values, damping),
@@ -21,6 +21,7 @@
 
 mod boundary;
 mod build;
+mod checkpoint;
 mod config;
 mod errors;
 mod grid_update;
@@ -38,6 +39,7 @@ use crate::grid::{GridGeom, Node};
 use crate::material::Elastic;
 use crate::particles::{Cold, Kin, Mech, Particles};
 use boundary::{BcNodes, LoadForce};
+pub use checkpoint::{CHECKPOINT_FORMAT, CheckpointError, checkpoint_steps};
 pub use config::{Parallelism, SolverConfig};
 pub use errors::{BuildError, StepError};
 pub use observe::WorkCounters;

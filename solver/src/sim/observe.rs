@@ -14,7 +14,7 @@ use crate::shape::Weights2;
 
 /// How often the optional phases of a step ran: cheap counters (incremented once per phase
 /// call, outside the particle and node loops) that show what a scene skips.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq)]
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
 pub struct WorkCounters {
     /// Steps taken.
     pub steps: u64,
