@@ -2,11 +2,11 @@
 //! AVX2/FMA build of the same source (`algorithm.md` §2 allows a CPU-feature dispatch; this is
 //! the one audited `unsafe` module of `style.md`).
 //!
-//! The passes are written once, generic over [`Arith`]: every product-and-sum of a transfer
+//! The passes are written once, generic over `Arith`: every product-and-sum of a transfer
 //! kernel (P2G, velocity gradient, force scatter, FLIP gather, re-extrapolation, stress
-//! update) goes through [`madd`], which is `a·b + c` with two roundings in the [`Portable`]
+//! update) goes through `madd`, which is `a·b + c` with two roundings in the `Portable`
 //! build (bitwise the results of the solver before the dispatch existed) and one fused
-//! rounding in the [`Fma`] build. [`Arith::run`] runs a strip's loop: for [`Fma`] inside a
+//! rounding in the `Fma` build. `Arith::run` runs a strip's loop: for `Fma` inside a
 //! function compiled with `avx2,fma` enabled, so the loop (inlined into it) uses the FMA
 //! instructions and the VEX encodings.
 //!
@@ -71,7 +71,7 @@ pub(crate) trait Arith: Copy + Send + Sync + 'static {
     fn run<R>(f: impl FnOnce() -> R) -> R;
 }
 
-/// `a·b + c`: fused (one rounding) in the [`Fma`] build, two roundings in [`Portable`].
+/// `a·b + c`: fused (one rounding) in the `Fma` build, two roundings in `Portable`.
 #[inline(always)]
 pub(crate) fn madd<A: Arith>(a: f64, b: f64, c: f64) -> f64 {
     if A::FMA { a.mul_add(b, c) } else { a * b + c }
