@@ -8,7 +8,9 @@ fn main() {
     let args: Vec<String> = std::env::args().collect();
     let cell: f64 = args.get(1).and_then(|a| a.parse().ok()).unwrap_or(0.002);
     let steps: usize = args.get(2).and_then(|a| a.parse().ok()).unwrap_or(20);
-    let crack = args.get(3).is_some_and(|a| a == "crack");
+    let crack = args.iter().skip(3).any(|a| a == "crack");
+    // `portable`: the portable kernel (bitwise the solver before the FMA dispatch).
+    let portable = args.iter().skip(3).any(|a| a == "portable");
     let m = 4.0 * cell;
     let mut v = serde_json::json!({
         "grid": {"cell_size": cell, "min": [0.0, 0.0], "max": [0.125 + 2.0 * m, 0.25 + 2.0 * m]},
@@ -26,6 +28,9 @@ fn main() {
         SolverConfig::with_threads(1),
     )
     .unwrap();
+    if portable {
+        sim.set_kernel(fracture_solver::kernel::Kernel::Portable);
+    }
     sim.step().unwrap();
     let t = std::time::Instant::now();
     let mut rows = 0usize;

@@ -15,6 +15,7 @@
 
 pub mod crack;
 pub mod grid;
+pub mod kernel;
 pub mod material;
 pub mod particles;
 pub mod shape;

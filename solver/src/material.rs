@@ -4,6 +4,8 @@
 
 use fracture_api::scene::{Analysis, Material};
 
+use crate::kernel::{Arith, madd};
+
 /// 2D stiffness of one material, ready for the stress update.
 #[derive(Debug, Clone, Copy, PartialEq)]
 pub struct Elastic {
@@ -59,14 +61,24 @@ impl Elastic {
     /// [Lyx, Lyy]] over `dt`; returns the strain energy density increment.
     #[inline(always)]
     pub fn update(&self, s: &mut [f64; 4], l: [[f64; 2]; 2], dt: f64) -> f64 {
+        self.update_k::<crate::kernel::Portable>(s, l, dt)
+    }
+
+    /// [`Elastic::update`] in the arithmetic `A` of a pass (`kernel.rs`): the same sums, each
+    /// product-and-sum fused in the FMA build.
+    #[inline(always)]
+    pub(crate) fn update_k<A: Arith>(&self, s: &mut [f64; 4], l: [[f64; 2]; 2], dt: f64) -> f64 {
         let exx = l[0][0] * dt;
         let eyy = l[1][1] * dt;
         let gxy = (l[0][1] + l[1][0]) * dt;
         let old = *s;
-        s[0] += self.c11 * exx + self.c12 * eyy;
-        s[1] += self.c12 * exx + self.c11 * eyy;
-        s[2] += self.c66 * gxy;
-        s[3] += self.cz * (exx + eyy);
-        0.5 * ((old[0] + s[0]) * exx + (old[1] + s[1]) * eyy + (old[2] + s[2]) * gxy)
+        // Δσ = C:Δε (plane strain: σ_zz = λ(Δε_xx + Δε_yy)).
+        s[0] += madd::<A>(self.c11, exx, self.c12 * eyy);
+        s[1] += madd::<A>(self.c12, exx, self.c11 * eyy);
+        s[2] = madd::<A>(self.c66, gxy, s[2]);
+        s[3] = madd::<A>(self.cz, exx + eyy, s[3]);
+        // ΔW = ½(σ_old + σ_new):Δε.
+        let e = madd::<A>(old[0] + s[0], exx, (old[1] + s[1]) * eyy);
+        0.5 * madd::<A>(old[2] + s[2], gxy, e)
     }
 }

@@ -7,6 +7,7 @@ use std::time::Instant;
 use anyhow::Context;
 use fracture_api::Scene;
 use fracture_api::validate::{scene_from_value, validate as validate_scene};
+use fracture_solver::kernel::Kernel;
 use fracture_solver::{Simulation, SolverConfig};
 
 /// Exit status of an output or system error.
@@ -64,6 +65,36 @@ pub struct BenchArgs {
     /// Print the result as JSON (single throughput run).
     #[arg(long)]
     pub json: bool,
+    /// Arithmetic of the particle passes (throughput): `auto` (FMA where the CPU has it),
+    /// `portable` or `fma`.
+    #[arg(long, value_enum, default_value_t = KernelArg::Auto)]
+    pub kernel: KernelArg,
+}
+
+/// `--kernel`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum KernelArg {
+    /// The fastest kernel this CPU runs.
+    Auto,
+    /// Plain multiply and add (the same bits on every CPU).
+    Portable,
+    /// Fused multiply-add (AVX2 and FMA; refused on a CPU without them).
+    Fma,
+}
+
+impl KernelArg {
+    /// The solver's kernel, or an error where this CPU lacks it.
+    pub fn kernel(self) -> anyhow::Result<Kernel> {
+        let k = match self {
+            KernelArg::Auto => Kernel::detect(),
+            KernelArg::Portable => Kernel::Portable,
+            KernelArg::Fma => Kernel::Fma,
+        };
+        if !k.available() {
+            anyhow::bail!("--kernel {}: this CPU lacks AVX2 or FMA", k.name());
+        }
+        Ok(k)
+    }
 }
 
 /// The benchmarks of `fracture bench`.
@@ -136,6 +167,7 @@ struct Throughput {
     wall_seconds: f64,
     seconds_per_step: f64,
     particle_steps_per_second: f64,
+    kernel: &'static str,
     solver_version: &'static str,
 }
 
@@ -149,6 +181,7 @@ fn throughput(a: &BenchArgs) -> anyhow::Result<Result<Throughput, String>> {
         SolverConfig { threads: a.threads },
     )
     .context("building the benchmark block")?;
+    sim.set_kernel(a.kernel.kernel()?);
     for _ in 0..a.warmup {
         if let Err(e) = sim.step() {
             return Ok(Err(e.to_string()));
@@ -179,6 +212,7 @@ fn throughput(a: &BenchArgs) -> anyhow::Result<Result<Throughput, String>> {
             0.0
         },
         particle_steps_per_second: rate(particles as f64 * a.steps as f64),
+        kernel: sim.kernel().name(),
         solver_version: fracture_api::SOLVER_VERSION,
     }))
 }
@@ -210,7 +244,7 @@ pub fn bench(a: BenchArgs) -> ExitCode {
             } else {
                 println!(
                     "throughput: {} particles ({} grid nodes), {} threads, {} steps after {} warm-up: \
-                     {:.3} s, {:.3e} s/step, {:.4e} particle-steps/s",
+                     {:.3} s, {:.3e} s/step, {:.4e} particle-steps/s ({} kernel)",
                     t.particles,
                     t.grid_nodes,
                     t.threads,
@@ -218,7 +252,8 @@ pub fn bench(a: BenchArgs) -> ExitCode {
                     t.warmup_steps,
                     t.wall_seconds,
                     t.seconds_per_step,
-                    t.particle_steps_per_second
+                    t.particle_steps_per_second,
+                    t.kernel
                 );
             }
             ExitCode::SUCCESS
@@ -299,6 +334,7 @@ fn bench_one(
                 warmup: a.warmup,
                 threads: a.thread_counts.clone(),
                 history_every: a.history_every,
+                kernel: a.kernel.kernel()?,
             },
             out.as_deref(),
         )

@@ -137,6 +137,7 @@ impl Simulation {
             alt_box: None,
             prefetched: None,
             fuse: true,
+            kernel: crate::kernel::Kernel::detect(),
         };
         if !scene.cracks.is_empty() {
             sim.slot_of = vec![u32::MAX; storage];

@@ -115,6 +115,8 @@ pub struct Simulation {
     prefetched: Option<transfer::Acc>,
     /// Fuse pass 4 with the next P2G where possible (switch for tests and benchmarks).
     fuse: bool,
+    /// Arithmetic of the particle passes (`kernel.rs`).
+    kernel: crate::kernel::Kernel,
 }
 
 impl Simulation {
@@ -224,6 +226,26 @@ impl Simulation {
     #[doc(hidden)]
     pub fn set_fused_step(&mut self, on: bool) {
         self.fuse = on;
+    }
+
+    /// The arithmetic of the particle passes: [`Kernel::Portable`](crate::kernel::Kernel) (the
+    /// same bits on every CPU) or [`Kernel::Fma`](crate::kernel::Kernel) (fused multiply-add,
+    /// last-bit differences, `kernel.rs`); by default the fastest this CPU runs. Returns the
+    /// kernel in use: the portable one where `kernel` is not available on this CPU.
+    pub fn set_kernel(&mut self, kernel: crate::kernel::Kernel) -> crate::kernel::Kernel {
+        self.kernel = if kernel.available() {
+            kernel
+        } else {
+            crate::kernel::Kernel::Portable
+        };
+        // A P2G done ahead by the last fused step used the other arithmetic.
+        self.prefetched = None;
+        self.kernel
+    }
+
+    /// The arithmetic of the particle passes.
+    pub fn kernel(&self) -> crate::kernel::Kernel {
+        self.kernel
     }
 
     fn contact(&mut self, stage: Stage) {

@@ -16,6 +16,7 @@ use super::Simulation;
 use super::errors::{FAIL_GRID, FAIL_POSITION, FAIL_STRESS, FAIL_VELOCITY, first_fail};
 use super::stencil::{Stencil, with_stencil};
 use crate::grid::{GridGeom, GridMut, Reduce, STRIP, for_strips};
+use crate::kernel::{Arith, Fma, Kernel, Portable, madd};
 use crate::material::Elastic;
 use crate::particles::PartsMut;
 use crate::shape::{Weights2, gimp_weights_1d};
@@ -81,13 +82,13 @@ fn grow_box(acc: &mut Acc, w: &Weights2) {
 /// L = Σ v ⊗ ∇S over the stencil, from the nodal velocities (`Node::v`) of the particle's own
 /// fields (pitfall 3); unscaled (cell units), as `stress_apply` takes it.
 #[inline(always)]
-fn gather_l(st: &mut impl Stencil) -> [[f64; 2]; 2] {
+fn gather_l<A: Arith>(st: &mut impl Stencil) -> [[f64; 2]; 2] {
     let mut l = [[0.0; 2]; 2];
     st.each(|_, g, n| {
-        l[0][0] += n.v[0] * g[0];
-        l[0][1] += n.v[0] * g[1];
-        l[1][0] += n.v[1] * g[0];
-        l[1][1] += n.v[1] * g[1];
+        l[0][0] = madd::<A>(n.v[0], g[0], l[0][0]);
+        l[0][1] = madd::<A>(n.v[0], g[1], l[0][1]);
+        l[1][0] = madd::<A>(n.v[1], g[0], l[1][0]);
+        l[1][1] = madd::<A>(n.v[1], g[1], l[1][1]);
     });
     l
 }
@@ -96,7 +97,7 @@ fn gather_l(st: &mut impl Stencil) -> [[f64; 2]; 2] {
 /// gradient `l` (Σ v ⊗ ∇S in cell units): stress, strain energy density `w` and, with cracks,
 /// the displacement gradient `grad_u` accumulated. Returns whether the new stress is finite.
 #[inline(always)]
-fn stress_apply(
+fn stress_apply<A: Arith>(
     mat: &Elastic,
     stress: &mut [f64; 4],
     w: &mut f64,
@@ -109,12 +110,12 @@ fn stress_apply(
         r[0] *= inv_h;
         r[1] *= inv_h;
     }
-    *w += mat.update(stress, l, half);
+    *w += mat.update_k::<A>(stress, l, half);
     if let Some(gu) = grad_u {
-        gu[0] += l[0][0] * half;
-        gu[1] += l[0][1] * half;
-        gu[2] += l[1][0] * half;
-        gu[3] += l[1][1] * half;
+        gu[0] = madd::<A>(l[0][0], half, gu[0]);
+        gu[1] = madd::<A>(l[0][1], half, gu[1]);
+        gu[2] = madd::<A>(l[1][0], half, gu[2]);
+        gu[3] = madd::<A>(l[1][1], half, gu[3]);
     }
     let s = *stress;
     s[0].is_finite() && s[1].is_finite() && s[2].is_finite()
@@ -141,6 +142,24 @@ impl P2gCx {
             cracks: sim.cracks.is_some(),
         }
     }
+
+    /// The weights of a particle at `x` of half-width `lh` (`lq`: the last half-width seen and
+    /// its 1/(4l)).
+    #[inline(always)]
+    fn weights(&self, x: [f64; 2], lh: f64, lq: &mut (f64, f64)) -> Weights2 {
+        let xi = self.geom.xi(x);
+        if self.gimp {
+            if lh != lq.0 {
+                *lq = (lh, 0.25 / lh);
+            }
+            Weights2 {
+                x: gimp_weights_1d(xi[0], lh, lq.1),
+                y: gimp_weights_1d(xi[1], lh, lq.1),
+            }
+        } else {
+            Weights2::new(self.shape, xi, lh)
+        }
+    }
 }
 
 /// P2G of particle `i`: its weights (cached in `p.wts` for the step's later passes), mass,
@@ -148,7 +167,7 @@ impl P2gCx {
 /// last half-width seen and its 1/(4l).
 #[allow(clippy::too_many_arguments)]
 #[inline(always)]
-fn p2g_particle(
+fn p2g_particle<A: Arith>(
     cx: &P2gCx,
     p: &mut PartsMut<'_>,
     i: usize,
@@ -161,18 +180,7 @@ fn p2g_particle(
     let geom = &cx.geom;
     let k = p.kin[i];
     let m = p.mech[i].m;
-    let lh = p.mech[i].lh;
-    let xi = geom.xi(k.x);
-    if cx.gimp {
-        if lh != lq.0 {
-            *lq = (lh, 0.25 / lh);
-        }
-        let wt = &mut p.wts[i];
-        wt.x = gimp_weights_1d(xi[0], lh, lq.1);
-        wt.y = gimp_weights_1d(xi[1], lh, lq.1);
-    } else {
-        p.wts[i] = Weights2::new(cx.shape, xi, lh);
-    }
+    p.wts[i] = cx.weights(k.x, p.mech[i].lh, lq);
     let w = &p.wts[i];
     grow_box(acc, w);
     let cracks = cx.cracks;
@@ -189,12 +197,13 @@ fn p2g_particle(
     let field0 = cx.field0_ok && mask == 0;
     with_stencil!(field0, g, geom, w, mask, slot_of, |st| {
         st.each_weighted(|s, _, n| {
-            n.m += s * m;
-            n.p[0] += s * mv[0];
-            n.p[1] += s * mv[1];
+            n.m = madd::<A>(s, m, n.m);
+            n.p[0] = madd::<A>(s, mv[0], n.p[0]);
+            n.p[1] = madd::<A>(s, mv[1], n.p[1]);
             if cracks {
-                n.u[0] += s * m * disp[0];
-                n.u[1] += s * m * disp[1];
+                let sm = s * m;
+                n.u[0] = madd::<A>(sm, disp[0], n.u[0]);
+                n.u[1] = madd::<A>(sm, disp[1], n.u[1]);
             }
         })
     });
@@ -228,22 +237,31 @@ impl Simulation {
 
     /// Pass 1: P2G of mass, momentum and (with cracks) mass-weighted displacement.
     pub(super) fn pass_p2g(&mut self) -> Acc {
+        match self.kernel {
+            Kernel::Portable => self.pass_p2g_k::<Portable>(),
+            Kernel::Fma => self.pass_p2g_k::<Fma>(),
+        }
+    }
+
+    fn pass_p2g_k<A: Arith>(&mut self) -> Acc {
         let cx = P2gCx::new(self);
         let slot_of = std::mem::take(&mut self.slot_of);
         let acc = self.strips(&|_s, first, mut p, mut g| {
-            // Locals, not the closure's captured references: read through those, the values
-            // are reloaded after every node store (the compiler cannot rule out aliasing),
-            // which costs the passes up to 8 % of their instructions.
-            #[allow(clippy::redundant_locals)]
-            let cx = cx;
-            let mut acc = Acc::default();
-            p.assert_lengths();
-            // 1/(4l) of the last particle size seen (all particles of a body share it).
-            let mut lq = (f64::NAN, f64::NAN);
-            for i in 0..p.len() {
-                p2g_particle(&cx, &mut p, i, first, &mut lq, &mut g, &slot_of, &mut acc);
-            }
-            acc
+            A::run(|| {
+                // Locals, not the closure's captured references: read through those, the
+                // values are reloaded after every node store (the compiler cannot rule out
+                // aliasing), which costs the passes up to 8 % of their instructions.
+                #[allow(clippy::redundant_locals)]
+                let cx = cx;
+                let mut acc = Acc::default();
+                p.assert_lengths();
+                // 1/(4l) of the last particle size seen (all particles of a body share it).
+                let mut lq = (f64::NAN, f64::NAN);
+                for i in 0..p.len() {
+                    p2g_particle::<A>(&cx, &mut p, i, first, &mut lq, &mut g, &slot_of, &mut acc);
+                }
+                acc
+            })
         });
         self.slot_of = slot_of;
         acc
@@ -251,6 +269,13 @@ impl Simulation {
 
     /// Pass 2: velocity gradient from p/m, first stress half-update, forces to the grid.
     pub(super) fn pass_forces(&mut self) -> Acc {
+        match self.kernel {
+            Kernel::Portable => self.pass_forces_k::<Portable>(),
+            Kernel::Fma => self.pass_forces_k::<Fma>(),
+        }
+    }
+
+    fn pass_forces_k<A: Arith>(&mut self) -> Acc {
         let geom = self.geom;
         let field0_ok = self.shape == ShapeFunction::Gimp && !self.generic_stencil;
         let half = 0.5 * self.dt;
@@ -260,51 +285,56 @@ impl Simulation {
         let mats = std::mem::take(&mut self.mats);
         let loads = std::mem::take(&mut self.load_now);
         let acc = self.strips(&|_s, first, p, mut g| {
-            // Locals, not captured references (see `pass_p2g`).
-            let (field0_ok, half, inv_h, h) = (field0_ok, half, inv_h, h);
-            let mut acc = Acc::default();
-            p.assert_lengths();
-            let has_mask = !p.fmask.is_empty();
-            for i in 0..p.len() {
-                let mech = p.mech[i];
-                let mask = if has_mask { p.fmask[i] } else { 0 };
-                // External force: traction × edge length (2l = h/ppc) × thickness.
-                let loaded = mech.load > 0;
-                let fext = if loaded {
-                    let t = loads[mech.load as usize - 1];
-                    let edge = 2.0 * mech.lh * h;
-                    [t[0] * edge, t[1] * edge]
-                } else {
-                    [0.0; 2]
-                };
-                let vs = mech.vol * inv_h;
-                let field0 = field0_ok && mask == 0;
-                with_stencil!(field0, &mut g, &geom, &p.wts[i], mask, &slot_of, |st| {
-                    let l = gather_l(&mut st);
-                    let mat = &mats[mech.mat as usize];
-                    let gu = p.grad_u.get_mut(i);
-                    if !stress_apply(mat, &mut p.stress[i], &mut p.mech[i].w, gu, l, half, inv_h) {
-                        first_fail(&mut acc, first + i, FAIL_STRESS);
-                    }
-                    let s = p.stress[i];
-                    st.each_weighted(|sh, gr, n| {
-                        let fi = [
-                            -vs * (s[0] * gr[0] + s[2] * gr[1]),
-                            -vs * (s[2] * gr[0] + s[1] * gr[1]),
-                        ];
-                        // Without a load S·0 = +0 would change nothing (sums start at +0 and
-                        // never become −0), so the unloaded particle skips it.
-                        if loaded {
-                            n.f[0] += fi[0] + sh * fext[0];
-                            n.f[1] += fi[1] + sh * fext[1];
-                        } else {
-                            n.f[0] += fi[0];
-                            n.f[1] += fi[1];
+            A::run(|| {
+                // Locals, not captured references (see `pass_p2g`).
+                let (field0_ok, half, inv_h, h) = (field0_ok, half, inv_h, h);
+                let mut acc = Acc::default();
+                p.assert_lengths();
+                let has_mask = !p.fmask.is_empty();
+                for i in 0..p.len() {
+                    let mech = p.mech[i];
+                    let mask = if has_mask { p.fmask[i] } else { 0 };
+                    // External force: traction × edge length (2l = h/ppc) × thickness.
+                    let loaded = mech.load > 0;
+                    let fext = if loaded {
+                        let t = loads[mech.load as usize - 1];
+                        let edge = 2.0 * mech.lh * h;
+                        [t[0] * edge, t[1] * edge]
+                    } else {
+                        [0.0; 2]
+                    };
+                    let vs = mech.vol * inv_h;
+                    let field0 = field0_ok && mask == 0;
+                    with_stencil!(field0, &mut g, &geom, &p.wts[i], mask, &slot_of, |st| {
+                        let l = gather_l::<A>(&mut st);
+                        let mat = &mats[mech.mat as usize];
+                        let gu = p.grad_u.get_mut(i);
+                        let (stress, w) = (&mut p.stress[i], &mut p.mech[i].w);
+                        if !stress_apply::<A>(mat, stress, w, gu, l, half, inv_h) {
+                            first_fail(&mut acc, first + i, FAIL_STRESS);
                         }
+                        let s = p.stress[i];
+                        let nvs = -vs;
+                        st.each_weighted(|sh, gr, n| {
+                            // f = −V σ·∇S (the sums inside the parentheses of −V(σ·∇S)).
+                            let sg = [
+                                madd::<A>(s[0], gr[0], s[2] * gr[1]),
+                                madd::<A>(s[2], gr[0], s[1] * gr[1]),
+                            ];
+                            // Without a load S·0 = +0 would change nothing (sums start at +0 and
+                            // never become −0), so the unloaded particle skips it.
+                            if loaded {
+                                n.f[0] += madd::<A>(sh, fext[0], nvs * sg[0]);
+                                n.f[1] += madd::<A>(sh, fext[1], nvs * sg[1]);
+                            } else {
+                                n.f[0] = madd::<A>(nvs, sg[0], n.f[0]);
+                                n.f[1] = madd::<A>(nvs, sg[1], n.f[1]);
+                            }
+                        });
                     });
-                });
-            }
-            acc
+                }
+                acc
+            })
         });
         self.slot_of = slot_of;
         self.mats = mats;
@@ -315,6 +345,13 @@ impl Simulation {
     /// Pass 3: FLIP particle update and re-extrapolation of the new momenta with the same
     /// weights and fields.
     pub(super) fn pass_update(&mut self) -> Acc {
+        match self.kernel {
+            Kernel::Portable => self.pass_update_k::<Portable>(),
+            Kernel::Fma => self.pass_update_k::<Fma>(),
+        }
+    }
+
+    fn pass_update_k<A: Arith>(&mut self) -> Acc {
         let geom = self.geom;
         let field0_ok = self.shape == ShapeFunction::Gimp && !self.generic_stencil;
         let dt = self.dt;
@@ -323,68 +360,77 @@ impl Simulation {
         let loads = std::mem::take(&mut self.load_now);
         let (ncx, ncy) = ((geom.nx - 1) as i64, (geom.ny - 1) as i64);
         let acc = self.strips(&|s, first, p, mut g| {
-            // Locals, not captured references (see `pass_p2g`).
-            let (field0_ok, dt, h) = (field0_ok, dt, h);
-            let mut acc = Acc::default();
-            p.assert_lengths();
-            let has_mask = !p.fmask.is_empty();
-            let lo = (s * STRIP) as i64 - 1;
-            let hi = ((s + 1) * STRIP) as i64;
-            for i in 0..p.len() {
-                let k = p.kin[i];
-                let mech = p.mech[i];
-                let w = &p.wts[i];
-                let mask = if has_mask { p.fmask[i] } else { 0 };
-                let field0 = field0_ok && mask == 0;
-                with_stencil!(field0, &mut g, &geom, w, mask, &slot_of, |st| {
-                    let mut acc_p = [0.0; 2];
-                    let mut vbar = [0.0; 2];
-                    st.each(|sh, _, n| {
-                        for c in 0..2 {
-                            let an = sh * n.a[c];
-                            acc_p[c] += an;
-                            // (v_old + v_new)/2 = p/m + Δt/2 · f/m
-                            vbar[c] += sh * n.v[c] + 0.5 * dt * an;
+            A::run(|| {
+                // Locals, not captured references (see `pass_p2g`).
+                let (field0_ok, dt, h) = (field0_ok, dt, h);
+                let hdt = 0.5 * dt;
+                let mut acc = Acc::default();
+                p.assert_lengths();
+                let has_mask = !p.fmask.is_empty();
+                let lo = (s * STRIP) as i64 - 1;
+                let hi = ((s + 1) * STRIP) as i64;
+                for i in 0..p.len() {
+                    let k = p.kin[i];
+                    let mech = p.mech[i];
+                    let w = &p.wts[i];
+                    let mask = if has_mask { p.fmask[i] } else { 0 };
+                    let field0 = field0_ok && mask == 0;
+                    with_stencil!(field0, &mut g, &geom, w, mask, &slot_of, |st| {
+                        let mut acc_p = [0.0; 2];
+                        let mut vbar = [0.0; 2];
+                        st.each(|sh, _, n| {
+                            for c in 0..2 {
+                                let an = sh * n.a[c];
+                                acc_p[c] += an;
+                                // (v_old + v_new)/2 = p/m + Δt/2 · f/m
+                                vbar[c] += madd::<A>(sh, n.v[c], hdt * an);
+                            }
+                        });
+                        let v_old = k.v;
+                        let v = [
+                            madd::<A>(dt, acc_p[0], v_old[0]),
+                            madd::<A>(dt, acc_p[1], v_old[1]),
+                        ];
+                        let xn = [
+                            madd::<A>(dt, vbar[0], k.x[0]),
+                            madd::<A>(dt, vbar[1], k.x[1]),
+                        ];
+                        if !(v[0].is_finite() && v[1].is_finite()) {
+                            first_fail(&mut acc, first + i, FAIL_VELOCITY);
+                        } else if !(xn[0].is_finite() && xn[1].is_finite()) {
+                            first_fail(&mut acc, first + i, FAIL_POSITION);
+                        } else {
+                            // Truncation (not floor): negative ξ gives 0 and is caught as < 1 too.
+                            let xi = geom.xi(xn);
+                            let (cx, cy) = (xi[0] as i64, xi[1] as i64);
+                            if xi[0] < 1.0 || xi[1] < 1.0 || cx + 1 >= ncx || cy + 1 >= ncy {
+                                first_fail(&mut acc, first + i, FAIL_GRID);
+                            }
+                            if cx < lo || cx > hi {
+                                acc.resort = true;
+                            }
                         }
+                        p.kin[i].v = v;
+                        p.x_next[i] = xn;
+                        acc.e += 0.5 * mech.m * (v[0] * v[0] + v[1] * v[1]);
+                        if mech.load > 0 {
+                            let t = loads[mech.load as usize - 1];
+                            let edge = 2.0 * mech.lh * h;
+                            // Work on the grid: F · v̄ Δt with v̄ the mid-step grid velocity at the
+                            // particle (the velocity that moves it), consistent with the grid's
+                            // energy.
+                            acc.w += edge * (t[0] * vbar[0] + t[1] * vbar[1]) * dt;
+                        }
+                        // Re-extrapolate momentum with the same weights and fields (pitfall 2).
+                        let mv = [mech.m * v[0], mech.m * v[1]];
+                        st.each(|sh, _, n| {
+                            n.q[0] = madd::<A>(sh, mv[0], n.q[0]);
+                            n.q[1] = madd::<A>(sh, mv[1], n.q[1]);
+                        });
                     });
-                    let v_old = k.v;
-                    let v = [v_old[0] + dt * acc_p[0], v_old[1] + dt * acc_p[1]];
-                    let xn = [k.x[0] + dt * vbar[0], k.x[1] + dt * vbar[1]];
-                    if !(v[0].is_finite() && v[1].is_finite()) {
-                        first_fail(&mut acc, first + i, FAIL_VELOCITY);
-                    } else if !(xn[0].is_finite() && xn[1].is_finite()) {
-                        first_fail(&mut acc, first + i, FAIL_POSITION);
-                    } else {
-                        // Truncation (not floor): negative ξ gives 0 and is caught as < 1 too.
-                        let xi = geom.xi(xn);
-                        let (cx, cy) = (xi[0] as i64, xi[1] as i64);
-                        if xi[0] < 1.0 || xi[1] < 1.0 || cx + 1 >= ncx || cy + 1 >= ncy {
-                            first_fail(&mut acc, first + i, FAIL_GRID);
-                        }
-                        if cx < lo || cx > hi {
-                            acc.resort = true;
-                        }
-                    }
-                    p.kin[i].v = v;
-                    p.x_next[i] = xn;
-                    acc.e += 0.5 * mech.m * (v[0] * v[0] + v[1] * v[1]);
-                    if mech.load > 0 {
-                        let t = loads[mech.load as usize - 1];
-                        let edge = 2.0 * mech.lh * h;
-                        // Work on the grid: F · v̄ Δt with v̄ the mid-step grid velocity at the
-                        // particle (the velocity that moves it), consistent with the grid's
-                        // energy.
-                        acc.w += edge * (t[0] * vbar[0] + t[1] * vbar[1]) * dt;
-                    }
-                    // Re-extrapolate momentum with the same weights and fields (pitfall 2).
-                    let mv = [mech.m * v[0], mech.m * v[1]];
-                    st.each(|sh, _, n| {
-                        n.q[0] += sh * mv[0];
-                        n.q[1] += sh * mv[1];
-                    });
-                });
-            }
-            acc
+                }
+                acc
+            })
         });
         self.slot_of = slot_of;
         self.load_now = loads;
@@ -419,6 +465,13 @@ impl Simulation {
     /// unfused P2G, so the results are bitwise identical (`tests/fused_step.rs`). Returns the
     /// reduction of pass 4 and that of the next step's P2G.
     pub(super) fn pass_strain_last_p2g(&mut self) -> (Acc, Acc) {
+        match self.kernel {
+            Kernel::Portable => self.pass_strain_last_p2g_k::<Portable>(),
+            Kernel::Fma => self.pass_strain_last_p2g_k::<Fma>(),
+        }
+    }
+
+    fn pass_strain_last_p2g_k<A: Arith>(&mut self) -> (Acc, Acc) {
         debug_assert!(self.cracks.is_none());
         let cx = P2gCx::new(self);
         let geom = self.geom;
@@ -434,44 +487,47 @@ impl Simulation {
                  mut p: PartsMut<'_>,
                  mut gc: GridMut<'_>,
                  mut gn: GridMut<'_>| {
-            // Locals, not captured references (see `pass_p2g`).
-            let (cx, field0_ok, half, inv_h) = (cx, field0_ok, half, inv_h);
-            let mut acc = Acc::default();
-            let mut acc_next = Acc::default();
-            p.assert_lengths();
-            let mut lq = (f64::NAN, f64::NAN);
-            for i in 0..p.len() {
-                let mech = p.mech[i];
-                let ok = with_stencil!(field0_ok, &mut gc, &geom, &p.wts[i], 0, &slot_of, |st| {
-                    let l = gather_l(&mut st);
-                    let mat = &mats[mech.mat as usize];
-                    stress_apply(
-                        mat,
-                        &mut p.stress[i],
-                        &mut p.mech[i].w,
-                        None,
-                        l,
-                        half,
-                        inv_h,
-                    )
-                });
-                if !ok {
-                    first_fail(&mut acc, first + i, FAIL_STRESS);
+            A::run(|| {
+                // Locals, not captured references (see `pass_p2g`).
+                let (cx, field0_ok, half, inv_h) = (cx, field0_ok, half, inv_h);
+                let mut acc = Acc::default();
+                let mut acc_next = Acc::default();
+                p.assert_lengths();
+                let mut lq = (f64::NAN, f64::NAN);
+                for i in 0..p.len() {
+                    let mech = p.mech[i];
+                    let ok =
+                        with_stencil!(field0_ok, &mut gc, &geom, &p.wts[i], 0, &slot_of, |st| {
+                            let l = gather_l::<A>(&mut st);
+                            let mat = &mats[mech.mat as usize];
+                            stress_apply::<A>(
+                                mat,
+                                &mut p.stress[i],
+                                &mut p.mech[i].w,
+                                None,
+                                l,
+                                half,
+                                inv_h,
+                            )
+                        });
+                    if !ok {
+                        first_fail(&mut acc, first + i, FAIL_STRESS);
+                    }
+                    acc.e += mech.vol * p.mech[i].w;
+                    p.kin[i].x = p.x_next[i];
+                    p2g_particle::<A>(
+                        &cx,
+                        &mut p,
+                        i,
+                        first,
+                        &mut lq,
+                        &mut gn,
+                        &slot_of,
+                        &mut acc_next,
+                    );
                 }
-                acc.e += mech.vol * p.mech[i].w;
-                p.kin[i].x = p.x_next[i];
-                p2g_particle(
-                    &cx,
-                    &mut p,
-                    i,
-                    first,
-                    &mut lq,
-                    &mut gn,
-                    &slot_of,
-                    &mut acc_next,
-                );
-            }
-            (acc, acc_next)
+                (acc, acc_next)
+            })
         };
         let mut out = (Acc::default(), Acc::default());
         for colour in 0..2 {
@@ -510,6 +566,13 @@ impl Simulation {
 
     /// Pass 4 alone (see [`pass_strain_last`](Simulation::pass_strain_last)).
     fn pass_strain_last_alone(&mut self) -> Acc {
+        match self.kernel {
+            Kernel::Portable => self.pass_strain_last_alone_k::<Portable>(),
+            Kernel::Fma => self.pass_strain_last_alone_k::<Fma>(),
+        }
+    }
+
+    fn pass_strain_last_alone_k<A: Arith>(&mut self) -> Acc {
         let geom = self.geom;
         let field0_ok = self.shape == ShapeFunction::Gimp && !self.generic_stencil;
         let half = 0.5 * self.dt;
@@ -517,29 +580,40 @@ impl Simulation {
         let slot_of = std::mem::take(&mut self.slot_of);
         let mats = std::mem::take(&mut self.mats);
         let acc = self.strips(&|_s, first, p, mut g| {
-            // Locals, not captured references (see `pass_p2g`).
-            let (field0_ok, half, inv_h) = (field0_ok, half, inv_h);
-            let mut acc = Acc::default();
-            p.assert_lengths();
-            let has_mask = !p.fmask.is_empty();
-            for i in 0..p.len() {
-                let mech = p.mech[i];
-                let mask = if has_mask { p.fmask[i] } else { 0 };
-                let field0 = field0_ok && mask == 0;
-                let ok = with_stencil!(field0, &mut g, &geom, &p.wts[i], mask, &slot_of, |st| {
-                    let l = gather_l(&mut st);
-                    let mat = &mats[mech.mat as usize];
-                    let gu = p.grad_u.get_mut(i);
-                    stress_apply(mat, &mut p.stress[i], &mut p.mech[i].w, gu, l, half, inv_h)
-                });
-                if !ok {
-                    first_fail(&mut acc, first + i, FAIL_STRESS);
+            A::run(|| {
+                // Locals, not captured references (see `pass_p2g`).
+                let (field0_ok, half, inv_h) = (field0_ok, half, inv_h);
+                let mut acc = Acc::default();
+                p.assert_lengths();
+                let has_mask = !p.fmask.is_empty();
+                for i in 0..p.len() {
+                    let mech = p.mech[i];
+                    let mask = if has_mask { p.fmask[i] } else { 0 };
+                    let field0 = field0_ok && mask == 0;
+                    let ok =
+                        with_stencil!(field0, &mut g, &geom, &p.wts[i], mask, &slot_of, |st| {
+                            let l = gather_l::<A>(&mut st);
+                            let mat = &mats[mech.mat as usize];
+                            let gu = p.grad_u.get_mut(i);
+                            stress_apply::<A>(
+                                mat,
+                                &mut p.stress[i],
+                                &mut p.mech[i].w,
+                                gu,
+                                l,
+                                half,
+                                inv_h,
+                            )
+                        });
+                    if !ok {
+                        first_fail(&mut acc, first + i, FAIL_STRESS);
+                    }
+                    let wnew = p.mech[i].w;
+                    acc.e += mech.vol * wnew;
+                    p.kin[i].x = p.x_next[i];
                 }
-                let wnew = p.mech[i].w;
-                acc.e += mech.vol * wnew;
-                p.kin[i].x = p.x_next[i];
-            }
-            acc
+                acc
+            })
         });
         self.slot_of = slot_of;
         self.mats = mats;
