@@ -137,7 +137,9 @@ impl Simulation {
             alt_box: None,
             prefetched: None,
             fuse: true,
-            kernel: crate::kernel::Kernel::detect(),
+            // The portable kernel by default: every stored result and test reproduces bit for
+            // bit; the FMA build is chosen with `set_kernel` or `fracture bench --kernel`.
+            kernel: crate::kernel::Kernel::Portable,
         };
         if !scene.cracks.is_empty() {
             sim.slot_of = vec![u32::MAX; storage];

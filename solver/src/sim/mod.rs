@@ -230,7 +230,7 @@ impl Simulation {
 
     /// The arithmetic of the particle passes: [`Kernel::Portable`](crate::kernel::Kernel) (the
     /// same bits on every CPU) or [`Kernel::Fma`](crate::kernel::Kernel) (fused multiply-add,
-    /// last-bit differences, `kernel.rs`); by default the fastest this CPU runs. Returns the
+    /// last-bit differences, `kernel.rs`); by default the portable one. Returns the
     /// kernel in use: the portable one where `kernel` is not available on this CPU.
     pub fn set_kernel(&mut self, kernel: crate::kernel::Kernel) -> crate::kernel::Kernel {
         self.kernel = if kernel.available() {
