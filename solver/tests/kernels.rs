@@ -7,7 +7,8 @@
 //!    the cell size, velocities, stresses and strain energy to their largest magnitude). The
 //!    crack's contact and growth decisions amplify the last-bit differences (measured: ~7e-15
 //!    without, ~5e-9 with the crack, printed with `--nocapture`); both stay far inside the
-//!    verification tests' tolerances, which run with the default (on this machine FMA) kernel.
+//!    verification tests' tolerances (which run with the default, portable, kernel; they passed
+//!    under FMA too when it was tried as the default).
 //!
 //! Reference: the portable kernel; resolution: 1 mm cells, 2×2 particles per cell, tens of
 //! steps, a crack with contact and growth to exercise the generic multi-field path.
