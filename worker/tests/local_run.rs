@@ -136,9 +136,10 @@ fn local_output_writes_the_run_output_files() {
     assert_eq!(tips[0], CRACK_TIPS_CSV_HEADER);
     assert_eq!(tips.len(), 2);
     let cols: Vec<&str> = tips[1].split(',').collect();
-    assert_eq!(cols.len(), 18);
+    assert_eq!(cols.len(), 20);
     assert_eq!((cols[1], cols[2], cols[11]), ("1", "0", "1"));
     assert_eq!(cols[6].parse::<f64>().unwrap(), 500.0);
+    assert_eq!(cols[18].parse::<f64>().unwrap(), 0.021);
 
     let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();
