@@ -145,9 +145,27 @@ fn a_stop_signal_hands_the_running_job_back_and_another_worker_completes_it() {
     assert_eq!(status(&j), "completed", "{j}");
     assert_eq!(j["attempts"], 1, "{j}");
     let rows = assert_rows_once(&s, &id);
-    // CHECKPOINT (helper ckpt's merge): assert here that the second run resumed from the
-    // checkpoint written at the hand-back (its first step after `stopped_at`), instead of
-    // step 0 as today.
+    // The second run resumed from the checkpoint written at the hand-back (the server logs
+    // the step of every resume), not from step 0.
+    let log = std::fs::read_to_string(dir.path().join("server.log")).unwrap_or_default();
+    let resumed: Vec<u64> = log
+        .lines()
+        .filter(|l| l.contains("resuming from its checkpoint") && l.contains(&id))
+        .filter_map(|l| {
+            l.split("step=")
+                .nth(1)?
+                .split(|c: char| !c.is_ascii_digit())
+                .next()?
+                .parse()
+                .ok()
+        })
+        .collect();
+    assert_eq!(resumed.len(), 1, "one resume expected:\n{log}");
+    assert!(
+        resumed[0] > 0 && resumed[0] + 200 >= stopped_at,
+        "resumed from step {} after a hand-back at step {stopped_at}",
+        resumed[0]
+    );
     eprintln!(
         "handed back {:.2} s after SIGTERM at step {stopped_at}; completed by another \
          worker ({rows} energy rows)",
