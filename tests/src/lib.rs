@@ -378,3 +378,20 @@ impl Drop for RemoteWorker {
         }
     }
 }
+
+/// The steps at which the server resumed job `id` from a checkpoint, from its log
+/// (`DATA/server.log`, one "resuming from its checkpoint … step=N" line per resume).
+pub fn resumed_steps(data: &Path, id: &str) -> Vec<u64> {
+    let log = std::fs::read_to_string(data.join("server.log")).unwrap_or_default();
+    log.lines()
+        .filter(|l| l.contains("resuming from its checkpoint") && l.contains(id))
+        .filter_map(|l| {
+            l.split("step=")
+                .nth(1)?
+                .split(|c: char| !c.is_ascii_digit())
+                .next()?
+                .parse()
+                .ok()
+        })
+        .collect()
+}

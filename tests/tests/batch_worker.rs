@@ -147,20 +147,8 @@ fn a_stop_signal_hands_the_running_job_back_and_another_worker_completes_it() {
     let rows = assert_rows_once(&s, &id);
     // The second run resumed from the checkpoint written at the hand-back (the server logs
     // the step of every resume), not from step 0.
-    let log = std::fs::read_to_string(dir.path().join("server.log")).unwrap_or_default();
-    let resumed: Vec<u64> = log
-        .lines()
-        .filter(|l| l.contains("resuming from its checkpoint") && l.contains(&id))
-        .filter_map(|l| {
-            l.split("step=")
-                .nth(1)?
-                .split(|c: char| !c.is_ascii_digit())
-                .next()?
-                .parse()
-                .ok()
-        })
-        .collect();
-    assert_eq!(resumed.len(), 1, "one resume expected:\n{log}");
+    let resumed = fracture_e2e::resumed_steps(dir.path(), &id);
+    assert_eq!(resumed.len(), 1, "one resume expected: {resumed:?}");
     assert!(
         resumed[0] > 0 && resumed[0] + 200 >= stopped_at,
         "resumed from step {} after a hand-back at step {stopped_at}",

@@ -524,20 +524,8 @@ fn a_slurm_job_array_drains_the_queue_and_a_signalled_worker_hands_its_job_back(
     let rows = assert_rows_once(&s, &long);
     // The second worker resumed from the checkpoint the first wrote at the hand-back (the
     // server logs the step of every resume), not from step 0.
-    let log = std::fs::read_to_string(data.join("server.log")).unwrap_or_default();
-    let resumed: Vec<u64> = log
-        .lines()
-        .filter(|l| l.contains("resuming from its checkpoint") && l.contains(&long))
-        .filter_map(|l| {
-            l.split("step=")
-                .nth(1)?
-                .split(|c: char| !c.is_ascii_digit())
-                .next()?
-                .parse()
-                .ok()
-        })
-        .collect();
-    assert_eq!(resumed.len(), 1, "one resume expected:\n{log}");
+    let resumed = fracture_e2e::resumed_steps(&data, &long);
+    assert_eq!(resumed.len(), 1, "one resume expected: {resumed:?}");
     assert!(
         resumed[0] > 0 && resumed[0] + 200 >= stopped_at,
         "resumed from step {} after a hand-back at step {stopped_at}",
