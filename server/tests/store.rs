@@ -650,34 +650,57 @@ async fn delete_and_metrics(store: Store) {
     assert!(!store.delete(&a).await.unwrap());
 }
 
-/// Eight claimers in parallel take 40 jobs: each exactly once.
-async fn parallel_claims_never_take_a_job_twice(store: Store) {
-    for i in 0..40 {
-        store
-            .create_job(&job(&format!("j{i:02}"), i % 3))
-            .await
-            .unwrap();
-    }
+/// Claimers released at once by a barrier, `rounds` times: each round's claims, per
+/// claimer. `each` runs one claimer: it claims until `stop` says so.
+async fn race<F, Fut>(store: &Store, claimers: usize, each: F) -> Vec<Vec<String>>
+where
+    F: Fn(Store, String) -> Fut,
+    Fut: std::future::Future<Output = Vec<String>> + Send + 'static,
+{
+    let barrier = std::sync::Arc::new(tokio::sync::Barrier::new(claimers));
     let mut tasks = Vec::new();
-    for w in 0..8 {
-        let store = store.clone();
+    for w in 0..claimers {
+        let (barrier, fut) = (barrier.clone(), each(store.clone(), format!("w{w}")));
         tasks.push(tokio::spawn(async move {
-            let mut got = Vec::new();
-            while let Some(c) = store.claim(&format!("w{w}"), LEASE).await.unwrap() {
-                got.push(c.job.id);
-                tokio::task::yield_now().await;
-            }
-            got
+            barrier.wait().await;
+            fut.await
         }));
     }
-    let mut all = Vec::new();
+    let mut out = Vec::new();
     for t in tasks {
-        all.extend(t.await.unwrap());
+        out.push(t.await.unwrap());
     }
-    let unique: HashSet<&String> = all.iter().collect();
-    assert_eq!(all.len(), 40, "claims: {all:?}");
-    assert_eq!(unique.len(), 40, "a job was claimed twice: {all:?}");
-    assert_eq!(store.counts().await.unwrap(), (0, 40));
+    out
+}
+
+/// Eight claimers released at once take 16 jobs, five times over: each job exactly once,
+/// and none of them stops early (a claim finds a job while one is left).
+async fn parallel_claims_never_take_a_job_twice(store: Store) {
+    for round in 0..5 {
+        for i in 0..16 {
+            store
+                .create_job(&job(&format!("r{round}j{i:02}"), i % 3))
+                .await
+                .unwrap();
+        }
+        let got = race(&store, 8, |store, w| async move {
+            let mut got = Vec::new();
+            while let Some(c) = store.claim(&w, LEASE).await.unwrap() {
+                got.push(c.job.id);
+            }
+            got
+        })
+        .await;
+        let all: Vec<String> = got.into_iter().flatten().collect();
+        let unique: HashSet<&String> = all.iter().collect();
+        assert_eq!(all.len(), 16, "round {round}: claims {all:?}");
+        assert_eq!(
+            unique.len(),
+            16,
+            "round {round}: a job was claimed twice: {all:?}"
+        );
+    }
+    assert_eq!(store.counts().await.unwrap(), (0, 80));
     for j in store
         .list(&ListFilter {
             limit: 100,
@@ -690,29 +713,30 @@ async fn parallel_claims_never_take_a_job_twice(store: Store) {
     }
 }
 
-/// Eight claimers race for a sweep of ten jobs limited to three at once: three run.
+/// Eight claimers released at once race for a sweep of ten jobs limited to three at once,
+/// five times over (a new sweep each time): three run each time.
 async fn parallel_claims_keep_a_sweeps_limit(store: Store) {
-    store
-        .create_sweep(&sweep("s", Some(3)), &sweep_jobs("s", 10))
-        .await
-        .unwrap();
-    let mut tasks = Vec::new();
-    for w in 0..8 {
-        let store = store.clone();
-        tasks.push(tokio::spawn(async move {
+    for round in 0..5 {
+        let id = format!("s{round}");
+        store
+            .create_sweep(&sweep(&id, Some(3)), &sweep_jobs(&format!("{id}-"), 10))
+            .await
+            .unwrap();
+        let got = race(&store, 8, |store, w| async move {
             store
-                .claim(&format!("w{w}"), LEASE)
+                .claim(&w, LEASE)
                 .await
                 .unwrap()
                 .map(|c| c.job.id)
-        }));
+                .into_iter()
+                .collect()
+        })
+        .await;
+        let claimed: Vec<String> = got.into_iter().flatten().collect();
+        assert_eq!(claimed.len(), 3, "round {round}: claimed {claimed:?}");
+        assert!(claimed.iter().all(|c| c.starts_with(&format!("{id}-"))));
     }
-    let mut claimed = Vec::new();
-    for t in tasks {
-        claimed.extend(t.await.unwrap());
-    }
-    assert_eq!(claimed.len(), 3, "claimed: {claimed:?}");
-    assert_eq!(store.counts().await.unwrap(), (7, 3));
+    assert_eq!(store.counts().await.unwrap(), (35, 15));
 }
 
 /// One server per PostgreSQL database: a second store on it is refused, naming why; once
