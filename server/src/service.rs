@@ -32,8 +32,10 @@ pub struct ServeArgs {
     pub data: PathBuf,
     /// The store on a PostgreSQL server instead of the embedded SQLite file
     /// (`postgres://user[:password]@host[:port]/database`); results files stay in `--data`.
-    #[arg(long, env = "FRACTURE_DATABASE", hide_env_values = true, value_parser = DatabaseUrl::parse)]
-    pub database: Option<DatabaseUrl>,
+    // Checked at start (`DatabaseUrl::parse`), not by the argument parser, whose error
+    // would show the value with its password.
+    #[arg(long, env = "FRACTURE_DATABASE", hide_env_values = true)]
+    pub database: Option<String>,
     /// Local worker processes (default: one per two cores, at least one; 0: none).
     #[arg(long, env = "FRACTURE_WORKERS")]
     pub workers: Option<usize>,
@@ -266,11 +268,18 @@ impl DataLock {
 async fn serve_async(a: ServeArgs) -> anyhow::Result<()> {
     use anyhow::Context;
     check_public_bind(&a)?;
+    let database = a
+        .database
+        .as_deref()
+        .filter(|d| !d.trim().is_empty())
+        .map(DatabaseUrl::parse)
+        .transpose()
+        .map_err(|e| anyhow::anyhow!(e))?;
     std::fs::create_dir_all(&a.data)
         .with_context(|| format!("cannot create the data folder {}", a.data.display()))?;
     // One server per data folder: nothing is touched before the lock is held.
     let lock = DataLock::acquire(&a.data)?;
-    let store = match &a.database {
+    let store = match &database {
         None => Store::open(&a.data.join("fracture.db"))
             .await
             .context("cannot open the store")?,

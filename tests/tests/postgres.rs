@@ -41,8 +41,14 @@ fn serve_on_postgres_runs_jobs_and_keeps_them_across_a_restart() {
         let energy = s.get_json(&format!("/api/v1/jobs/{id}/energy"));
         assert!(!energy.as_array().unwrap().is_empty(), "{energy}");
         let snaps = s.get_json(&format!("/api/v1/jobs/{id}/snapshots"));
-        assert_eq!(snaps.as_array().unwrap().len(), 2, "{snaps}");
-        assert!(dir.path().join("jobs").join(id).join("fields.mcap").exists());
+        assert!(snaps.as_array().unwrap().len() >= 2, "{snaps}");
+        assert!(
+            dir.path()
+                .join("jobs")
+                .join(id)
+                .join("fields.mcap")
+                .exists()
+        );
     }
     assert!(
         !dir.path().join("fracture.db").exists(),
@@ -51,7 +57,11 @@ fn serve_on_postgres_runs_jobs_and_keeps_them_across_a_restart() {
     // The cache answers from PostgreSQL's rows too.
     let again = s.submit(&json!({"scene": tiny_scene("pg0", 60, 2)}));
     let j = s.job(&again);
-    assert_eq!((j["status"].as_str(), j["cached_from"].as_str()), (Some("completed"), Some(ids[0].as_str())), "{j}");
+    assert_eq!(
+        (j["status"].as_str(), j["cached_from"].as_str()),
+        (Some("completed"), Some(ids[0].as_str())),
+        "{j}"
+    );
 
     s.restart();
     let list = s.get_json("/api/v1/jobs");
@@ -63,21 +73,31 @@ fn serve_on_postgres_runs_jobs_and_keeps_them_across_a_restart() {
     assert!(log.contains("store on PostgreSQL"), "{log}");
 }
 
-/// `--database` errors: a URL of another kind is a usage error naming the flag (status 2);
-/// an unreachable server is a startup error naming it (status 1), password hidden.
+/// `--database` errors at start (status 1), naming the flag, password hidden: a URL of
+/// another kind, an unreachable server.
 #[test]
 fn bad_or_unreachable_database_is_a_clear_startup_error() {
     let dir = tempfile::tempdir().unwrap();
     let out = Command::new(fracture_bin())
-        .args(["serve", "--bind", "127.0.0.1:0", "--workers", "0", "--database"])
+        .args([
+            "serve",
+            "--bind",
+            "127.0.0.1:0",
+            "--workers",
+            "0",
+            "--database",
+        ])
         .arg("mysql://u:pw@localhost/db")
         .arg("--data")
         .arg(dir.path())
         .output()
         .unwrap();
     let err = String::from_utf8_lossy(&out.stderr);
-    assert_eq!(out.status.code(), Some(2), "{err}");
-    assert!(err.contains("--database") && err.contains("not a PostgreSQL URL"), "{err}");
+    assert_eq!(out.status.code(), Some(1), "{err}");
+    assert!(
+        err.contains("--database") && err.contains("not a PostgreSQL URL"),
+        "{err}"
+    );
     assert!(!err.contains("pw@"), "{err}");
 
     let port = std::net::TcpListener::bind("127.0.0.1:0")
@@ -87,7 +107,10 @@ fn bad_or_unreachable_database_is_a_clear_startup_error() {
         .port();
     let out = Command::new(fracture_bin())
         .args(["serve", "--bind", "127.0.0.1:0", "--workers", "0"])
-        .env("FRACTURE_DATABASE", format!("postgres://u:secret@127.0.0.1:{port}/db"))
+        .env(
+            "FRACTURE_DATABASE",
+            format!("postgres://u:secret@127.0.0.1:{port}/db"),
+        )
         .arg("--data")
         .arg(dir.path())
         .output()
