@@ -550,3 +550,96 @@ mod tests {
         assert!(Limits::default().precheck(&s).is_ok());
     }
 }
+
+/// Where the store lives (`fracture serve --database`, `FRACTURE_DATABASE`): absent, the
+/// embedded SQLite file `<data>/fracture.db`; else a PostgreSQL server.
+#[derive(Clone, PartialEq, Eq)]
+pub struct DatabaseUrl(String);
+
+impl DatabaseUrl {
+    /// Parse a `--database` value: `postgres://` or `postgresql://` URLs that sqlx's
+    /// PostgreSQL driver accepts; anything else is an error naming the flag and the value
+    /// (its password hidden).
+    pub fn parse(s: &str) -> Result<DatabaseUrl, String> {
+        use std::str::FromStr;
+        let s = s.trim();
+        let shown = redact_url(s);
+        if !(s.starts_with("postgres://") || s.starts_with("postgresql://")) {
+            return Err(format!(
+                "--database `{shown}` is not a PostgreSQL URL (postgres://user[:password]@host[:port]/database); \
+                 leave --database out for the embedded SQLite store in --data"
+            ));
+        }
+        sqlx::postgres::PgConnectOptions::from_str(s)
+            .map_err(|e| format!("--database `{shown}` is not a valid PostgreSQL URL: {e}"))?;
+        Ok(DatabaseUrl(s.to_string()))
+    }
+
+    /// The URL, password included (to connect).
+    pub fn url(&self) -> &str {
+        &self.0
+    }
+}
+
+/// The URL with its password hidden (`postgres://user:***@host/db`): for messages and logs.
+impl std::fmt::Display for DatabaseUrl {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        f.write_str(&redact_url(&self.0))
+    }
+}
+
+impl std::fmt::Debug for DatabaseUrl {
+    fn fmt(&self, f: &mut std::fmt::Formatter<'_>) -> std::fmt::Result {
+        write!(f, "DatabaseUrl({self})")
+    }
+}
+
+/// `scheme://user:password@host…` with the password replaced by `***`; also a
+/// `password=` query parameter.
+pub fn redact_url(s: &str) -> String {
+    let mut out = s.to_string();
+    if let Some(start) = s.find("://").map(|i| i + 3) {
+        let end = s[start..]
+            .find(['/', '?'])
+            .map(|i| start + i)
+            .unwrap_or(s.len());
+        if let Some(at) = s[start..end].rfind('@').map(|i| start + i)
+            && let Some(colon) = s[start..at].find(':').map(|i| start + i)
+        {
+            out = format!("{}:***{}", &s[..colon], &s[at..]);
+        }
+    }
+    if let Some(q) = out.find("password=") {
+        let end = out[q..].find('&').map(|i| q + i).unwrap_or(out.len());
+        out = format!("{}password=***{}", &out[..q], &out[end..]);
+    }
+    out
+}
+
+#[cfg(test)]
+mod database_tests {
+    #![allow(clippy::unwrap_used)]
+    use super::*;
+
+    #[test]
+    fn database_urls_are_checked_and_passwords_never_shown() {
+        let ok = DatabaseUrl::parse("postgres://fracture:s3cret@db.example:5433/jobs").unwrap();
+        assert_eq!(ok.url(), "postgres://fracture:s3cret@db.example:5433/jobs");
+        assert_eq!(
+            ok.to_string(),
+            "postgres://fracture:***@db.example:5433/jobs"
+        );
+        assert!(!format!("{ok:?}").contains("s3cret"));
+        assert!(DatabaseUrl::parse("postgresql://u@localhost/db").is_ok());
+        let e = DatabaseUrl::parse("mysql://u:pw@h/db").unwrap_err();
+        assert!(e.contains("--database `mysql://u:***@h/db`"), "{e}");
+        assert!(e.contains("not a PostgreSQL URL"), "{e}");
+        let e = DatabaseUrl::parse("postgres://u:pw@h:notaport/db").unwrap_err();
+        assert!(e.contains("--database") && !e.contains("pw@"), "{e}");
+        assert_eq!(
+            redact_url("postgres://h/db?user=u&password=pw&sslmode=require"),
+            "postgres://h/db?user=u&password=***&sslmode=require"
+        );
+        assert_eq!(redact_url("postgres://u@h/db"), "postgres://u@h/db");
+    }
+}

@@ -211,12 +211,16 @@ pub enum DbFault {
     Busy,
 }
 
-/// Classify a database error by SQLite's primary result code (`SQLITE_FULL` 13,
+/// Classify a database error: SQLite's primary result code (`SQLITE_FULL` 13,
 /// `SQLITE_IOERR` 10, `SQLITE_READONLY` 8, `SQLITE_CANTOPEN` 14, `SQLITE_BUSY` 5,
-/// `SQLITE_LOCKED` 6) or the I/O error under it.
+/// `SQLITE_LOCKED` 6), PostgreSQL's SQLSTATE ([`classify_postgres`]), or the I/O error under
+/// it; a connection to the database that is refused or drops is [`DbFault::Busy`].
 pub fn classify_db(e: &sqlx::Error) -> Option<DbFault> {
     match e {
         sqlx::Error::Database(d) => {
+            if let Some(pg) = d.try_downcast_ref::<sqlx::postgres::PgDatabaseError>() {
+                return classify_postgres(pg.code());
+            }
             let code = d.code()?.parse::<i64>().ok()? & 0xff;
             match code {
                 13 => Some(DbFault::Storage("the disk is full")),
@@ -227,8 +231,35 @@ pub fn classify_db(e: &sqlx::Error) -> Option<DbFault> {
                 _ => None,
             }
         }
-        sqlx::Error::Io(io) => storage_fault(io).map(DbFault::Storage),
+        sqlx::Error::Io(io) => storage_fault(io).map(DbFault::Storage).or_else(|| {
+            use std::io::ErrorKind::*;
+            matches!(
+                io.kind(),
+                ConnectionRefused
+                    | ConnectionReset
+                    | ConnectionAborted
+                    | BrokenPipe
+                    | UnexpectedEof
+            )
+            .then_some(DbFault::Busy)
+        }),
         sqlx::Error::PoolTimedOut => Some(DbFault::Busy),
+        _ => None,
+    }
+}
+
+/// Classify a PostgreSQL error by its SQLSTATE: `53100` (disk full) and `58030` (I/O error)
+/// are storage faults of the database server, `25006` (a read-only transaction: a standby)
+/// too; the other insufficient resources (`53…`), serialization failures and deadlocks
+/// (`40001`, `40P01`), a lock not available (`55P03`), a server shutting down or starting
+/// (`57P01`–`57P03`) and connection exceptions (`08…`) are [`DbFault::Busy`].
+pub fn classify_postgres(sqlstate: &str) -> Option<DbFault> {
+    match sqlstate {
+        "53100" => Some(DbFault::Storage("the database server's disk is full")),
+        "58030" => Some(DbFault::Storage("an I/O error on the database server")),
+        "25006" => Some(DbFault::Storage("the database is read-only")),
+        "40001" | "40P01" | "55P03" | "57P01" | "57P02" | "57P03" => Some(DbFault::Busy),
+        s if s.starts_with("53") || s.starts_with("08") => Some(DbFault::Busy),
         _ => None,
     }
 }
@@ -256,9 +287,14 @@ pub fn storage_fault(e: &(dyn std::error::Error + 'static)) -> Option<&'static s
 
 /// The message of a 507.
 fn storage_message(what: &str) -> String {
+    let place = if what.contains("database server") || what.contains("the database is") {
+        ""
+    } else {
+        " in its data folder"
+    };
     format!(
-        "the server could not store this request: {what} in its data folder. Nothing was \
-         stored; retry once space is freed (no restart needed)"
+        "the server could not store this request: {what}{place}. Nothing was stored; retry \
+         once space is freed (no restart needed)"
     )
 }
 

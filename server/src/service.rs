@@ -15,7 +15,7 @@ use tokio::process::{Child, Command};
 
 use fracture_api::protocol::{STDERR_TAIL, exit_cause};
 
-use crate::config::{Config, Limits};
+use crate::config::{Config, DatabaseUrl, Limits};
 use crate::files::JobFiles;
 use crate::server::{AppState, random_hex};
 use crate::store::Store;
@@ -27,9 +27,15 @@ pub struct ServeArgs {
     /// to `<data>/server.addr`).
     #[arg(long, env = "FRACTURE_BIND", default_value = "127.0.0.1:8080")]
     pub bind: String,
-    /// Data folder: the SQLite store and `jobs/<id>/fields.mcap`.
+    /// Data folder: the SQLite store (unless `--database`) and `jobs/<id>/fields.mcap`.
     #[arg(long, env = "FRACTURE_DATA", default_value = "./fracture-data")]
     pub data: PathBuf,
+    /// The store on a PostgreSQL server instead of the embedded SQLite file
+    /// (`postgres://user[:password]@host[:port]/database`); results files stay in `--data`.
+    // Checked at start (`DatabaseUrl::parse`), not by the argument parser, whose error
+    // would show the value with its password.
+    #[arg(long, env = "FRACTURE_DATABASE", hide_env_values = true)]
+    pub database: Option<String>,
     /// Local worker processes (default: one per two cores, at least one; 0: none).
     #[arg(long, env = "FRACTURE_WORKERS")]
     pub workers: Option<usize>,
@@ -262,13 +268,30 @@ impl DataLock {
 async fn serve_async(a: ServeArgs) -> anyhow::Result<()> {
     use anyhow::Context;
     check_public_bind(&a)?;
+    let database = a
+        .database
+        .as_deref()
+        .filter(|d| !d.trim().is_empty())
+        .map(DatabaseUrl::parse)
+        .transpose()
+        .map_err(|e| anyhow::anyhow!(e))?;
     std::fs::create_dir_all(&a.data)
         .with_context(|| format!("cannot create the data folder {}", a.data.display()))?;
     // One server per data folder: nothing is touched before the lock is held.
     let lock = DataLock::acquire(&a.data)?;
-    let store = Store::open(&a.data.join("fracture.db"))
-        .await
-        .context("cannot open the store")?;
+    let store = match &database {
+        None => Store::open(&a.data.join("fracture.db"))
+            .await
+            .context("cannot open the store")?,
+        Some(db) => {
+            let store = Store::open_postgres(db.url()).await.map_err(|e| match e {
+                crate::store::StoreError::InUse(m) => anyhow::anyhow!("--database {db}: {m}"),
+                e => anyhow::anyhow!("cannot use the PostgreSQL database of --database {db}: {e}"),
+            })?;
+            tracing::info!(database = %db, "store on PostgreSQL");
+            store
+        }
+    };
     // Jobs left running by a previous server go back to the queue (their workers' late
     // writes are fenced off; a new claim restarts their files).
     let recovered = store

@@ -520,7 +520,7 @@ async fn a_corrupt_row_is_a_500_not_a_default() {
     // damages the row's labels.
     sqlx::query("UPDATE jobs SET labels = 'not json' WHERE id = ?")
         .bind(&id)
-        .execute(st.store.pool())
+        .execute(st.store.sqlite_pool().unwrap())
         .await
         .unwrap();
     let (s, v) = call(&st, get(&format!("/api/v1/jobs/{id}"))).await;

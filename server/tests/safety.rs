@@ -99,7 +99,7 @@ async fn submit(st: &AppState, body: &Value) -> (StatusCode, Value) {
 /// Cap every pooled connection at `pages` database pages (`PRAGMA max_page_count`): past
 /// it SQLite answers `SQLITE_FULL`, as on a full disk. 0 lifts the cap.
 async fn cap_pages(store: &Store, pages: u64) {
-    let pool = store.pool();
+    let pool = store.sqlite_pool().unwrap();
     let mut held = Vec::new();
     for _ in 0..pool.options().get_max_connections() {
         held.push(pool.acquire().await.unwrap());
@@ -115,7 +115,7 @@ async fn cap_pages(store: &Store, pages: u64) {
 
 async fn page_count(store: &Store) -> u64 {
     let n: i64 = sqlx::query_scalar("PRAGMA page_count")
-        .fetch_one(store.pool())
+        .fetch_one(store.sqlite_pool().unwrap())
         .await
         .unwrap();
     n as u64
@@ -253,7 +253,7 @@ async fn no_connection_returns_to_the_pool_inside_a_transaction() {
     let dir = tempfile::tempdir().unwrap();
     let st = state(dir.path()).await;
     {
-        let mut c = st.store.pool().acquire().await.unwrap();
+        let mut c = st.store.sqlite_pool().unwrap().acquire().await.unwrap();
         sqlx::raw_sql(
             "BEGIN IMMEDIATE; INSERT INTO jobs (id, name, status, priority, labels, scene, \
              end_time, created_at) VALUES ('ghost', 'g', 'queued', 0, '{}', '{}', 1.0, 'now')",

@@ -6,11 +6,11 @@ use std::collections::BTreeMap;
 use fracture_api::Scene;
 use fracture_api::jobs::{JobInfo, JobStatus, StatusEvent};
 use fracture_api::results::{Progress, Summary};
-use sqlx::sqlite::SqliteRow;
-use sqlx::{QueryBuilder, Sqlite};
+use sqlx::QueryBuilder;
 
 use super::{
-    Store, StoreError, col, col_u32, delete_job_rows, from_json, json_col, opt_json_col, to_json,
+    Db, Store, StoreError, StoreRow, Tx, delete_job_rows, from_json, now_text, on_db, on_tx,
+    parse_time_text, to_json,
 };
 
 /// A job as stored, decoded.
@@ -74,57 +74,43 @@ pub struct JobRow {
 
 impl JobRow {
     /// Decode a `SELECT * FROM jobs` (or `RETURNING *`) row.
-    pub(super) fn decode(r: &SqliteRow) -> Result<JobRow, StoreError> {
-        let status: String = col(r, "status")?;
+    pub(super) fn decode(r: &impl StoreRow) -> Result<JobRow, StoreError> {
+        let status = r.text("status")?;
         let status = JobStatus::parse(&status)
             .ok_or_else(|| StoreError::Corrupt(format!("column `status`: unknown `{status}`")))?;
-        let sweep_index: Option<i64> = col(r, "sweep_index")?;
-        let sweep_index = sweep_index
-            .map(|i| {
-                u32::try_from(i).map_err(|_| {
-                    StoreError::Corrupt(format!("column `sweep_index`: {i} is not a u32"))
-                })
-            })
-            .transpose()?;
         Ok(JobRow {
-            seq: col(r, "seq")?,
-            id: col(r, "id")?,
-            name: col(r, "name")?,
+            seq: r.int("seq")?,
+            id: r.text("id")?,
+            name: r.text("name")?,
             status,
-            priority: col(r, "priority")?,
-            labels: json_col(r, "labels")?,
-            scene: col(r, "scene")?,
-            end_time: col(r, "end_time")?,
-            created_at: col(r, "created_at")?,
-            started_at: col(r, "started_at")?,
-            finished_at: col(r, "finished_at")?,
-            attempts: col_u32(r, "attempts")?,
-            fence: col(r, "fence")?,
-            worker_id: col(r, "worker_id")?,
-            lease_until_ms: col(r, "lease_until_ms")?,
-            cancel_requested: col::<i64>(r, "cancel_requested")? != 0,
-            progress: opt_json_col(r, "progress")?,
-            summary: opt_json_col(r, "summary")?,
-            message: col(r, "message")?,
-            sweep_id: col(r, "sweep_id")?,
-            sweep_index,
-            sweep_label: col(r, "sweep_label")?,
-            sweep_values: opt_json_col(r, "sweep_values")?,
-            rerun_of: col(r, "rerun_of")?,
-            scene_hash: col(r, "scene_hash")?,
-            cached_from: col(r, "cached_from")?,
-            max_attempts: col::<Option<i64>>(r, "max_attempts")?
-                .map(|n| {
-                    u32::try_from(n).map_err(|_| {
-                        StoreError::Corrupt(format!("column `max_attempts`: {n} is not a u32"))
-                    })
-                })
-                .transpose()?,
+            priority: r.int("priority")?,
+            labels: r.json("labels")?,
+            scene: r.text("scene")?,
+            end_time: r.real("end_time")?,
+            created_at: r.text("created_at")?,
+            started_at: r.opt_text("started_at")?,
+            finished_at: r.opt_text("finished_at")?,
+            attempts: r.u32("attempts")?,
+            fence: r.int("fence")?,
+            worker_id: r.opt_text("worker_id")?,
+            lease_until_ms: r.opt_int("lease_until_ms")?,
+            cancel_requested: r.int("cancel_requested")? != 0,
+            progress: r.opt_json("progress")?,
+            summary: r.opt_json("summary")?,
+            message: r.opt_text("message")?,
+            sweep_id: r.opt_text("sweep_id")?,
+            sweep_index: r.opt_u32("sweep_index")?,
+            sweep_label: r.opt_text("sweep_label")?,
+            sweep_values: r.opt_json("sweep_values")?,
+            rerun_of: r.opt_text("rerun_of")?,
+            scene_hash: r.opt_text("scene_hash")?,
+            cached_from: r.opt_text("cached_from")?,
+            max_attempts: r.opt_u32("max_attempts")?,
         })
     }
 
     /// Decode many rows.
-    pub(super) fn decode_all(rows: &[SqliteRow]) -> Result<Vec<JobRow>, StoreError> {
+    pub(super) fn decode_all<R: StoreRow>(rows: &[R]) -> Result<Vec<JobRow>, StoreError> {
         rows.iter().map(JobRow::decode).collect()
     }
 
@@ -216,25 +202,29 @@ pub(super) type SweepPlace<'a> = (&'a str, i64, &'a str, &'a str);
 /// The completed job a new job with this scene hash reuses: the newest completed job with
 /// that hash whose summary has `solver_version`, that is not itself a cached copy.
 async fn cache_source(
-    tx: &mut sqlx::SqliteConnection,
+    tx: &mut Tx,
     scene_hash: &str,
     solver_version: &str,
 ) -> Result<Option<String>, StoreError> {
-    Ok(sqlx::query_scalar(
-        "SELECT id FROM jobs WHERE scene_hash = ? AND status = 'completed' AND cached_from IS NULL
-           AND json_extract(summary, '$.solver_version') = ?
+    let sql = tx.backend().pick(
+        "SELECT id FROM jobs WHERE scene_hash = $1 AND status = 'completed' AND cached_from IS NULL
+           AND json_extract(summary, '$.solver_version') = $2
          ORDER BY seq DESC LIMIT 1",
-    )
-    .bind(scene_hash)
-    .bind(solver_version)
-    .fetch_optional(&mut *tx)
-    .await?)
+        "SELECT id FROM jobs WHERE scene_hash = $1 AND status = 'completed' AND cached_from IS NULL
+           AND (summary::jsonb ->> 'solver_version') = $2
+         ORDER BY seq DESC LIMIT 1",
+    );
+    Ok(on_tx!(tx, c => sqlx::query_scalar(sql)
+        .bind(scene_hash)
+        .bind(solver_version)
+        .fetch_optional(c)
+        .await?))
 }
 
 /// Insert a job: a copy of a completed run of the same scene (status `completed`, its
 /// summary and progress, `cached_from` set) when `j.use_cache` finds one, else queued.
 pub(super) async fn insert_job(
-    tx: &mut sqlx::SqliteConnection,
+    tx: &mut Tx,
     j: &NewJob,
     sweep: Option<SweepPlace<'_>>,
 ) -> Result<JobRow, StoreError> {
@@ -243,72 +233,57 @@ pub(super) async fn insert_job(
         None => (None, None, None, None),
     };
     let source = if j.use_cache {
-        cache_source(&mut *tx, &j.scene_hash, fracture_api::SOLVER_VERSION).await?
+        cache_source(tx, &j.scene_hash, fracture_api::SOLVER_VERSION).await?
     } else {
         None
     };
     let labels = to_json("labels", &j.labels)?;
-    let row = if let Some(src) = source {
-        sqlx::query(
-            "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at,
-                               started_at, finished_at, rerun_of, sweep_id, sweep_index,
-                               sweep_label, sweep_values, scene_hash, max_attempts, cached_from,
-                               progress, summary)
-             SELECT ?, ?, 'completed', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'),
-                    strftime('%Y-%m-%dT%H:%M:%fZ','now'), strftime('%Y-%m-%dT%H:%M:%fZ','now'),
-                    ?, ?, ?, ?, ?, ?, ?, id, progress, summary
-             FROM jobs WHERE id = ?
-             RETURNING *",
-        )
-        .bind(&j.id)
-        .bind(&j.name)
-        .bind(j.priority)
-        .bind(&labels)
-        .bind(&j.scene)
-        .bind(j.end_time)
-        .bind(&j.rerun_of)
-        .bind(sweep_id)
-        .bind(sweep_index)
-        .bind(sweep_label)
-        .bind(sweep_values)
-        .bind(&j.scene_hash)
-        .bind(j.max_attempts.map(i64::from))
-        .bind(&src)
-        .fetch_one(&mut *tx)
-        .await?
+    let now = now_text();
+    // A copy (`$15`: the completed job copied) or a queued job: the same 15 values.
+    let sql = if source.is_some() {
+        "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at,
+                           started_at, finished_at, rerun_of, sweep_id, sweep_index,
+                           sweep_label, sweep_values, scene_hash, max_attempts, cached_from,
+                           progress, summary)
+         SELECT $1, $2, 'completed', $3, $4, $5, $6, $7, $7, $7,
+                $8, $9, $10, $11, $12, $13, $14, id, progress, summary
+         FROM jobs WHERE id = $15
+         RETURNING *"
     } else {
-        sqlx::query(
-            "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at,
-                               rerun_of, sweep_id, sweep_index, sweep_label, sweep_values,
-                               scene_hash, max_attempts)
-             VALUES (?, ?, 'queued', ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'),
-                     ?, ?, ?, ?, ?, ?, ?)
-             RETURNING *",
-        )
-        .bind(&j.id)
-        .bind(&j.name)
-        .bind(j.priority)
-        .bind(&labels)
-        .bind(&j.scene)
-        .bind(j.end_time)
-        .bind(&j.rerun_of)
-        .bind(sweep_id)
-        .bind(sweep_index)
-        .bind(sweep_label)
-        .bind(sweep_values)
-        .bind(&j.scene_hash)
-        .bind(j.max_attempts.map(i64::from))
-        .fetch_one(&mut *tx)
-        .await?
+        "INSERT INTO jobs (id, name, status, priority, labels, scene, end_time, created_at,
+                           rerun_of, sweep_id, sweep_index, sweep_label, sweep_values,
+                           scene_hash, max_attempts)
+         VALUES ($1, $2, 'queued', $3, $4, $5, $6, $7, $8, $9, $10, $11, $12, $13, $14)
+         RETURNING *"
     };
-    JobRow::decode(&row)
+    on_tx!(tx, c => {
+        let mut q = sqlx::query(sql)
+            .bind(&j.id)
+            .bind(&j.name)
+            .bind(j.priority)
+            .bind(&labels)
+            .bind(&j.scene)
+            .bind(j.end_time)
+            .bind(&now)
+            .bind(&j.rerun_of)
+            .bind(sweep_id)
+            .bind(sweep_index)
+            .bind(sweep_label)
+            .bind(sweep_values)
+            .bind(&j.scene_hash)
+            .bind(j.max_attempts.map(i64::from));
+        if let Some(src) = &source {
+            q = q.bind(src);
+        }
+        JobRow::decode(&q.fetch_one(c).await?)
+    })
 }
 
 impl Store {
     /// Insert a job: queued, or a completed copy of a run of the same scene
     /// ([`NewJob::use_cache`]).
     pub async fn create_job(&self, j: &NewJob) -> Result<JobRow, StoreError> {
-        let mut tx = self.pool.begin().await?;
+        let mut tx = self.db.begin().await?;
         let row = insert_job(&mut tx, j, None).await?;
         tx.commit().await?;
         Ok(row)
@@ -316,88 +291,102 @@ impl Store {
 
     /// One job.
     pub async fn get(&self, id: &str) -> Result<Option<JobRow>, StoreError> {
-        sqlx::query("SELECT * FROM jobs WHERE id = ?")
+        on_db!(&self.db, c => sqlx::query("SELECT * FROM jobs WHERE id = $1")
             .bind(id)
-            .fetch_optional(&self.pool)
+            .fetch_optional(c)
             .await?
             .as_ref()
             .map(JobRow::decode)
-            .transpose()
+            .transpose())
     }
 
     /// Jobs, newest first.
     pub async fn list(&self, f: &ListFilter) -> Result<Vec<JobRow>, StoreError> {
-        let mut q: QueryBuilder<Sqlite> = QueryBuilder::new("SELECT * FROM jobs WHERE 1 = 1");
-        if let Some(s) = f.status {
-            q.push(" AND status = ").push_bind(s.as_str());
-        }
-        for (k, v) in &f.labels {
-            q.push(" AND EXISTS (SELECT 1 FROM json_each(jobs.labels) WHERE json_each.key = ")
+        let backend = self.db.backend();
+        on_db!(&self.db, c, DB => {
+            let mut q: QueryBuilder<DB> = QueryBuilder::new("SELECT * FROM jobs WHERE 1 = 1");
+            if let Some(s) = f.status {
+                q.push(" AND status = ").push_bind(s.as_str());
+            }
+            for (k, v) in &f.labels {
+                q.push(backend.pick(
+                    " AND EXISTS (SELECT 1 FROM json_each(jobs.labels) WHERE json_each.key = ",
+                    " AND EXISTS (SELECT 1 FROM jsonb_each_text(jobs.labels::jsonb) e WHERE e.key = ",
+                ))
                 .push_bind(k.clone())
-                .push(" AND json_each.value = ")
+                .push(backend.pick(" AND json_each.value = ", " AND e.value = "))
                 .push_bind(v.clone())
                 .push(")");
-        }
-        if let Some(text) = &f.name_contains {
-            q.push(" AND instr(lower(name), lower(")
-                .push_bind(text.clone())
-                .push(")) > 0");
-        }
-        if let Some(b) = f.before_seq {
-            q.push(" AND seq < ").push_bind(b);
-        }
-        q.push(" ORDER BY seq DESC LIMIT ").push_bind(f.limit);
-        JobRow::decode_all(&q.build().fetch_all(&self.pool).await?)
+            }
+            if let Some(text) = &f.name_contains {
+                // Both compare ASCII letters case-insensitively (PostgreSQL's `lower` also
+                // folds other letters, by the database's locale).
+                q.push(backend.pick(" AND instr(lower(name), lower(", " AND strpos(lower(name), lower("))
+                    .push_bind(text.clone())
+                    .push(")) > 0");
+            }
+            if let Some(b) = f.before_seq {
+                q.push(" AND seq < ").push_bind(b);
+            }
+            q.push(" ORDER BY seq DESC LIMIT ").push_bind(f.limit);
+            JobRow::decode_all(&q.build().fetch_all(c).await?)
+        })
     }
 
     /// Number of queued and running jobs.
     pub async fn counts(&self) -> Result<(u64, u64), StoreError> {
-        let row = sqlx::query(
-            "SELECT COALESCE(SUM(status = 'queued'), 0) AS q, COALESCE(SUM(status = 'running'), 0) AS r FROM jobs",
-        )
-        .fetch_one(&self.pool)
-        .await?;
-        let q: i64 = col(&row, "q")?;
-        let r: i64 = col(&row, "r")?;
+        let (q, r) = on_db!(&self.db, c => {
+            let row = sqlx::query(
+                "SELECT COUNT(*) FILTER (WHERE status = 'queued') AS q,
+                        COUNT(*) FILTER (WHERE status = 'running') AS r FROM jobs",
+            )
+            .fetch_one(c)
+            .await?;
+            (row.int("q")?, row.int("r")?)
+        });
         Ok((q.max(0) as u64, r.max(0) as u64))
     }
 
     /// Number of jobs in the store.
     pub async fn count_all(&self) -> Result<u64, StoreError> {
-        let n: i64 = sqlx::query_scalar("SELECT COUNT(*) FROM jobs")
-            .fetch_one(&self.pool)
-            .await?;
+        let n: i64 = on_db!(&self.db, c => sqlx::query_scalar("SELECT COUNT(*) FROM jobs")
+            .fetch_one(c)
+            .await?);
         Ok(n.max(0) as u64)
     }
 
     /// Cancel: a queued job ends at once; a running one is flagged for its worker.
     /// Returns the job after the change, `None` if unknown.
     pub async fn cancel(&self, id: &str) -> Result<Option<JobRow>, StoreError> {
-        sqlx::query(
-            "UPDATE jobs SET status = 'cancelled', message = 'cancelled before it started',
-                finished_at = strftime('%Y-%m-%dT%H:%M:%fZ','now')
-             WHERE id = ? AND status = 'queued'",
-        )
-        .bind(id)
-        .execute(&self.pool)
-        .await?;
-        sqlx::query("UPDATE jobs SET cancel_requested = 1 WHERE id = ? AND status = 'running'")
+        let now = now_text();
+        on_db!(&self.db, c => {
+            sqlx::query(
+                "UPDATE jobs SET status = 'cancelled', message = 'cancelled before it started',
+                    finished_at = $2
+                 WHERE id = $1 AND status = 'queued'",
+            )
             .bind(id)
-            .execute(&self.pool)
+            .bind(&now)
+            .execute(c)
             .await?;
+            sqlx::query("UPDATE jobs SET cancel_requested = 1 WHERE id = $1 AND status = 'running'")
+                .bind(id)
+                .execute(c)
+                .await?;
+        });
         self.get(id).await
     }
 
     /// Delete a finished job and its rows. Returns false if it is unknown or not finished.
     pub async fn delete(&self, id: &str) -> Result<bool, StoreError> {
-        let mut tx = self.pool.begin().await?;
-        let n = sqlx::query(
-            "DELETE FROM jobs WHERE id = ? AND status IN ('completed', 'failed', 'cancelled')",
+        let mut tx = self.db.begin().await?;
+        let n = on_tx!(&mut tx, c => sqlx::query(
+            "DELETE FROM jobs WHERE id = $1 AND status IN ('completed', 'failed', 'cancelled')",
         )
         .bind(id)
-        .execute(&mut *tx)
+        .execute(c)
         .await?
-        .rows_affected();
+        .rows_affected());
         if n == 1 {
             delete_job_rows(&mut tx, id).await?;
         }
@@ -434,39 +423,49 @@ impl Store {
     /// Counts per state, jobs finished in the last `window_seconds`, and the running jobs.
     pub async fn metrics(&self, window_seconds: u32) -> Result<StoreMetrics, StoreError> {
         let mut m = StoreMetrics::default();
-        for r in sqlx::query("SELECT status, COUNT(*) AS n FROM jobs GROUP BY status")
-            .fetch_all(&self.pool)
+        let now = time::OffsetDateTime::now_utc();
+        let since = super::time_text(now - time::Duration::seconds(i64::from(window_seconds)));
+        let (by_status, n, running) = on_db!(&self.db, c => {
+            let by_status = sqlx::query("SELECT status, COUNT(*) AS n FROM jobs GROUP BY status")
+                .fetch_all(c)
+                .await?
+                .iter()
+                .map(|r| Ok((r.text("status")?, r.int("n")?)))
+                .collect::<Result<Vec<_>, StoreError>>()?;
+            let n: i64 = sqlx::query_scalar(
+                "SELECT COUNT(*) FROM jobs WHERE finished_at IS NOT NULL AND finished_at >= $1",
+            )
+            .bind(&since)
+            .fetch_one(c)
+            .await?;
+            let running = sqlx::query(
+                "SELECT id, scene, progress, started_at FROM jobs WHERE status = 'running'",
+            )
+            .fetch_all(c)
             .await?
-        {
-            let s: String = col(&r, "status")?;
-            let n: i64 = col(&r, "n")?;
-            m.by_status.insert(s, n.max(0) as u64);
+            .iter()
+            .map(|r| {
+                let progress: Option<Progress> = r.opt_json("progress")?;
+                let started = r.opt_text("started_at")?;
+                let elapsed = started
+                    .as_deref()
+                    .and_then(parse_time_text)
+                    .map(|t| (now - t).as_seconds_f64().max(0.0));
+                Ok(RunningJob {
+                    id: r.text("id")?,
+                    scene: r.text("scene")?,
+                    step: progress.map(|p| p.step).unwrap_or(0),
+                    elapsed_seconds: elapsed.unwrap_or(0.0),
+                })
+            })
+            .collect::<Result<Vec<_>, StoreError>>()?;
+            (by_status, n, running)
+        });
+        for (s, k) in by_status {
+            m.by_status.insert(s, k.max(0) as u64);
         }
-        let n: i64 = sqlx::query_scalar(
-            "SELECT COUNT(*) FROM jobs WHERE finished_at IS NOT NULL
-               AND finished_at >= strftime('%Y-%m-%dT%H:%M:%fZ', 'now', '-' || ? || ' seconds')",
-        )
-        .bind(i64::from(window_seconds))
-        .fetch_one(&self.pool)
-        .await?;
         m.finished_in_window = n.max(0) as u64;
-        for r in sqlx::query(
-            "SELECT id, scene, progress,
-                    (julianday('now') - julianday(started_at)) * 86400.0 AS elapsed
-             FROM jobs WHERE status = 'running'",
-        )
-        .fetch_all(&self.pool)
-        .await?
-        {
-            let progress: Option<Progress> = opt_json_col(&r, "progress")?;
-            let elapsed: Option<f64> = col(&r, "elapsed")?;
-            m.running.push(RunningJob {
-                id: col(&r, "id")?,
-                scene: col(&r, "scene")?,
-                step: progress.map(|p| p.step).unwrap_or(0),
-                elapsed_seconds: elapsed.unwrap_or(0.0),
-            });
-        }
+        m.running = running;
         Ok(m)
     }
 }

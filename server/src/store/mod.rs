@@ -1,14 +1,55 @@
-//! The SQLite store: the server is its only writer.
+//! The store: SQLite (embedded, the default) or PostgreSQL (`--database postgres://…`); the
+//! server is its only writer.
 //!
-//! * [`Store`]: the pool (one connection in SQLite's EXCLUSIVE locking mode, so the WAL index
-//!   lives in heap memory: no file is mapped into the process), [`Store::open`] with the
-//!   embedded numbered migrations
-//!   (`server/migrations/`, never edited after they land), [`StoreError`].
+//! * [`Store`]: the database ([`Store::open`]: a SQLite file, one connection in EXCLUSIVE
+//!   locking mode, so the WAL index lives in heap memory and no file is mapped into the
+//!   process; [`Store::open_postgres`]: a pool of connections and a session lock that makes
+//!   this server the database's only one), the embedded numbered migrations of each
+//!   (`server/migrations/`, `server/migrations-postgres/`, never edited after they land),
+//!   [`StoreError`].
 //! * `jobs`: job rows ([`JobRow`]), creation, lists, cancellation, deletion.
-//! * `queue`: the durable queue: claim with one `UPDATE … RETURNING`, leases, heartbeats,
-//!   fencing tokens, the reaper, release at shutdown.
+//! * `queue`: the durable queue: claims (SQLite: one `UPDATE … RETURNING`; PostgreSQL:
+//!   `SELECT … FOR UPDATE SKIP LOCKED` then the `UPDATE`, in one transaction), leases,
+//!   heartbeats, fencing tokens, the reaper, release at shutdown.
 //! * `results`: history rows (energy, crack tips) and snapshots, all fenced writes.
 //! * `sweeps`: sweep rows and their jobs.
+//!
+//! # Two backends, one query each
+//!
+//! `Db` holds the pool of either backend and `Tx` a transaction of either. A query is
+//! written **once** with `$1`, `$2`, … placeholders (SQLite reads `$N` as the N-th bound
+//! value, as PostgreSQL does) in the SQL both understand, and run with `on_db!` (on the
+//! pool) or `on_tx!` (inside a transaction). These expand their body once per backend,
+//! with the connection of that backend, so the same `.bind(…)` chain and the same row
+//! decoding (`StoreRow`) serve both:
+//!
+//! ```ignore
+//! pub async fn get(&self, id: &str) -> Result<Option<JobRow>, StoreError> {
+//!     on_db!(&self.db, c => sqlx::query("SELECT * FROM jobs WHERE id = $1")
+//!         .bind(id)
+//!         .fetch_optional(c)
+//!         .await?
+//!         .as_ref()
+//!         .map(JobRow::decode)
+//!         .transpose())
+//! }
+//! ```
+//!
+//! Where the dialects differ (JSON functions, `FOR UPDATE SKIP LOCKED`), the two texts
+//! are given side by side and picked by the backend: `self.db.backend().pick(SQLITE,
+//! POSTGRES)`. Portable SQL: times are bound from Rust (`now_text`) rather than read from
+//! the database's clock; `CASE` instead of the two-argument `MAX`; `COUNT(*) FILTER
+//! (WHERE …)`; `INSERT … ON CONFLICT … DO UPDATE`; every integer column is `BIGINT` in
+//! PostgreSQL (decoded as `i64` by both), every real `DOUBLE PRECISION`, JSON stays
+//! `TEXT`, and the history tables have a `rowid` column in PostgreSQL so the same
+//! `ORDER BY rowid` reads rows in insertion order. Bind only types both encode (`i64`,
+//! `f64`, `bool`, text, bytes, and `Option`s of them; no unsigned integers).
+//!
+//! A new migration goes into both folders under the same number (the PostgreSQL folder
+//! starts with the schema of SQLite's 0001–0008 in one file); `tests/store.rs` runs every
+//! store test on both backends.
+//!
+//! # Writes
 //!
 //! Every write is one statement or one transaction, and no connection goes back to the pool
 //! with a transaction open ([`Store::open`]): after a failed `COMMIT` (a full disk, an I/O
@@ -29,14 +70,16 @@
 
 use std::path::Path;
 use std::str::FromStr;
+use std::sync::Arc;
 use std::time::{Duration, SystemTime, UNIX_EPOCH};
 
 use serde::de::DeserializeOwned;
+use sqlx::postgres::{PgConnectOptions, PgConnection, PgPool, PgPoolOptions, PgRow};
 use sqlx::sqlite::{
     SqliteConnectOptions, SqliteJournalMode, SqliteLockingMode, SqlitePoolOptions, SqliteRow,
     SqliteSynchronous,
 };
-use sqlx::{Connection, Row, Sqlite, SqlitePool};
+use sqlx::{Connection, Postgres, Row, Sqlite, SqlitePool};
 
 mod jobs;
 mod queue;
@@ -62,6 +105,9 @@ pub enum StoreError {
     /// Stored data could not be decoded.
     #[error("corrupt stored data: {0}")]
     Corrupt(String),
+    /// Another fracture server holds the database (PostgreSQL: its session lock).
+    #[error("{0}")]
+    InUse(String),
 }
 
 /// Milliseconds since the Unix epoch.
@@ -72,17 +118,179 @@ pub fn now_ms() -> i64 {
         .unwrap_or(0)
 }
 
-/// Every timestamp is SQLite's UTC clock in RFC 3339 with milliseconds (this expression).
-pub const TIMESTAMP_SQL: &str = "strftime('%Y-%m-%dT%H:%M:%fZ','now')";
+/// A UTC time as the store writes it: RFC 3339 with milliseconds
+/// (`2026-12-02T04:45:31.123Z`), which sorts as text in time order.
+pub fn time_text(t: time::OffsetDateTime) -> String {
+    let t = t.to_offset(time::UtcOffset::UTC);
+    format!(
+        "{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:03}Z",
+        t.year(),
+        u8::from(t.month()),
+        t.day(),
+        t.hour(),
+        t.minute(),
+        t.second(),
+        t.millisecond()
+    )
+}
+
+/// Now, as the store writes times ([`time_text`]): every timestamp comes from this
+/// server's clock, bound into the query, whichever the database.
+pub fn now_text() -> String {
+    time_text(time::OffsetDateTime::now_utc())
+}
+
+/// Read back a time the store wrote ([`time_text`]); `None` if it is not one.
+pub fn parse_time_text(s: &str) -> Option<time::OffsetDateTime> {
+    let b = s.as_bytes();
+    if b.len() != 24 || b[4] != b'-' || b[7] != b'-' || b[10] != b'T' || b[23] != b'Z' {
+        return None;
+    }
+    let n = |r: std::ops::Range<usize>| s.get(r)?.parse::<u32>().ok();
+    let month = time::Month::try_from(u8::try_from(n(5..7)?).ok()?).ok()?;
+    let date =
+        time::Date::from_calendar_date(i32::try_from(n(0..4)?).ok()?, month, n(8..10)? as u8)
+            .ok()?;
+    let t = time::Time::from_hms_milli(
+        n(11..13)? as u8,
+        n(14..16)? as u8,
+        n(17..19)? as u8,
+        n(20..23)? as u16,
+    )
+    .ok()?;
+    Some(time::PrimitiveDateTime::new(date, t).assume_utc())
+}
+
+/// Which database a store runs on (and so which SQL dialect a query is written in).
+#[derive(Debug, Clone, Copy, PartialEq, Eq)]
+pub enum Backend {
+    /// The embedded SQLite file.
+    Sqlite,
+    /// A PostgreSQL server.
+    Postgres,
+}
+
+impl Backend {
+    /// The SQL text of this backend, where the two dialects differ.
+    pub fn pick(self, sqlite: &'static str, postgres: &'static str) -> &'static str {
+        match self {
+            Backend::Sqlite => sqlite,
+            Backend::Postgres => postgres,
+        }
+    }
+}
+
+/// The pool of either backend.
+#[derive(Debug, Clone)]
+enum Db {
+    Sqlite(SqlitePool),
+    Postgres(PgPool),
+}
+
+/// A transaction of either backend.
+enum Tx {
+    Sqlite(sqlx::Transaction<'static, Sqlite>),
+    Postgres(sqlx::Transaction<'static, Postgres>),
+}
+
+/// Run `$body` once per backend with `$c` the backend's pool (`&Pool<DB>`, an executor).
+/// `$c, $DB => …` also names the backend's `sqlx::Database` type (for `QueryBuilder`).
+macro_rules! on_db {
+    ($db:expr, $c:ident => $body:expr) => {
+        on_db!($db, $c, _DB => $body)
+    };
+    ($db:expr, $c:ident, $DB:ident => $body:expr) => {
+        match $db {
+            Db::Sqlite($c) => {
+                #[allow(dead_code)]
+                type $DB = sqlx::Sqlite;
+                $body
+            }
+            Db::Postgres($c) => {
+                #[allow(dead_code)]
+                type $DB = sqlx::Postgres;
+                $body
+            }
+        }
+    };
+}
+
+/// Run `$body` once per backend with `$c` the transaction's connection
+/// (`&mut <DB as Database>::Connection`: pass it as `&mut *c` to run more than one
+/// statement). `$c, $DB => …` also names the backend's `sqlx::Database` type.
+macro_rules! on_tx {
+    ($tx:expr, $c:ident => $body:expr) => {
+        on_tx!($tx, $c, _DB => $body)
+    };
+    ($tx:expr, $c:ident, $DB:ident => $body:expr) => {
+        match $tx {
+            Tx::Sqlite(t) => {
+                #[allow(dead_code)]
+                type $DB = sqlx::Sqlite;
+                let $c = &mut **t;
+                $body
+            }
+            Tx::Postgres(t) => {
+                #[allow(dead_code)]
+                type $DB = sqlx::Postgres;
+                let $c = &mut **t;
+                $body
+            }
+        }
+    };
+}
+pub(crate) use {on_db, on_tx};
+
+impl Db {
+    fn backend(&self) -> Backend {
+        match self {
+            Db::Sqlite(_) => Backend::Sqlite,
+            Db::Postgres(_) => Backend::Postgres,
+        }
+    }
+
+    async fn begin(&self) -> Result<Tx, StoreError> {
+        Ok(match self {
+            Db::Sqlite(p) => Tx::Sqlite(p.begin().await?),
+            Db::Postgres(p) => Tx::Postgres(p.begin().await?),
+        })
+    }
+}
+
+impl Tx {
+    fn backend(&self) -> Backend {
+        match self {
+            Tx::Sqlite(_) => Backend::Sqlite,
+            Tx::Postgres(_) => Backend::Postgres,
+        }
+    }
+
+    async fn commit(self) -> Result<(), StoreError> {
+        match self {
+            Tx::Sqlite(t) => t.commit().await?,
+            Tx::Postgres(t) => t.commit().await?,
+        }
+        Ok(())
+    }
+}
+
+/// The key of the session-level advisory lock a server holds on its PostgreSQL database
+/// (the bytes of "fracture"): one server per database, as one per data folder.
+const PG_LOCK_KEY: i64 = 0x6672_6163_7475_7265;
+
+/// Connections of the PostgreSQL pool.
+const PG_CONNECTIONS: u32 = 10;
 
 /// Handle to the database (cheap to clone).
 #[derive(Debug, Clone)]
 pub struct Store {
-    pool: SqlitePool,
+    db: Db,
+    /// PostgreSQL: the connection holding the database's session lock ([`PG_LOCK_KEY`]).
+    lock: Option<Arc<tokio::sync::Mutex<Option<PgConnection>>>>,
 }
 
 impl Store {
-    /// Open (creating if needed) the database file and run the embedded migrations.
+    /// Open (creating if needed) the SQLite database file and run the embedded migrations.
     pub async fn open(path: &Path) -> Result<Store, StoreError> {
         // EXCLUSIVE locking before WAL: SQLite keeps the WAL index in heap memory instead of
         // a shared-memory file (`fracture.db-shm`) mapped into the process. A mapped file
@@ -142,43 +350,187 @@ impl Store {
             .connect_with(opts)
             .await?;
         sqlx::migrate!("./migrations").run(&pool).await?;
-        Ok(Store { pool })
+        Ok(Store {
+            db: Db::Sqlite(pool),
+            lock: None,
+        })
     }
 
-    /// Close the pool (waits for connections to be returned).
+    /// Connect to the PostgreSQL database at `url` (`postgres://user[:password]@host[:port]/db`),
+    /// take its session lock (another server on the same database is
+    /// [`StoreError::InUse`]) and run the embedded migrations.
+    pub async fn open_postgres(url: &str) -> Result<Store, StoreError> {
+        let opts = PgConnectOptions::from_str(url)?;
+        // The lock first, on a connection of its own: nothing is migrated or re-queued
+        // under another server.
+        let mut lock = PgConnection::connect_with(&opts).await?;
+        let got: bool = sqlx::query_scalar("SELECT pg_try_advisory_lock($1)")
+            .bind(PG_LOCK_KEY)
+            .fetch_one(&mut lock)
+            .await?;
+        if !got {
+            let holder: Option<String> = sqlx::query_scalar(
+                "SELECT COALESCE(a.application_name, '') || ' (pid ' || a.pid || ', from ' \
+                        || COALESCE(host(a.client_addr), 'a local socket') || ')'
+                 FROM pg_locks l JOIN pg_stat_activity a ON a.pid = l.pid
+                 WHERE l.locktype = 'advisory' AND l.granted
+                   AND l.database = (SELECT oid FROM pg_database WHERE datname = current_database())
+                   AND ((l.classid::bigint << 32) | l.objid::bigint) = $1
+                 LIMIT 1",
+            )
+            .bind(PG_LOCK_KEY)
+            .fetch_optional(&mut lock)
+            .await
+            .ok()
+            .flatten();
+            let _ = lock.close().await;
+            return Err(StoreError::InUse(format!(
+                "the PostgreSQL database is in use by another fracture server{}; stop it \
+                 first or choose another database",
+                holder.map(|h| format!(": session {h}")).unwrap_or_default()
+            )));
+        }
+        let pool = PgPoolOptions::new()
+            .max_connections(PG_CONNECTIONS)
+            .acquire_timeout(Duration::from_secs(10))
+            .connect_with(opts)
+            .await?;
+        sqlx::migrate!("./migrations-postgres").run(&pool).await?;
+        Ok(Store {
+            db: Db::Postgres(pool),
+            lock: Some(Arc::new(tokio::sync::Mutex::new(Some(lock)))),
+        })
+    }
+
+    /// The database this store runs on.
+    pub fn backend(&self) -> Backend {
+        self.db.backend()
+    }
+
+    /// Close the pool (waits for connections to be returned) and release the database's
+    /// lock.
     pub async fn close(&self) {
-        self.pool.close().await;
+        match &self.db {
+            Db::Sqlite(p) => p.close().await,
+            Db::Postgres(p) => p.close().await,
+        }
+        if let Some(lock) = &self.lock
+            && let Some(conn) = lock.lock().await.take()
+        {
+            let _ = conn.close().await;
+        }
     }
 
     /// The ids of every stored job (for the sweep of orphaned result folders at start).
     pub async fn job_ids(&self) -> Result<std::collections::HashSet<String>, StoreError> {
-        let ids: Vec<String> = sqlx::query_scalar("SELECT id FROM jobs")
-            .fetch_all(&self.pool)
-            .await?;
+        let ids: Vec<String> = on_db!(&self.db, c => sqlx::query_scalar("SELECT id FROM jobs")
+            .fetch_all(c)
+            .await?);
         Ok(ids.into_iter().collect())
     }
 
-    /// A raw handle for tests and fault injection (e.g. `PRAGMA max_page_count`).
+    /// The SQLite pool, for tests and fault injection (e.g. `PRAGMA max_page_count`);
+    /// `None` on PostgreSQL.
     #[doc(hidden)]
-    pub fn pool(&self) -> &SqlitePool {
-        &self.pool
+    pub fn sqlite_pool(&self) -> Option<&SqlitePool> {
+        match &self.db {
+            Db::Sqlite(p) => Some(p),
+            Db::Postgres(_) => None,
+        }
+    }
+
+    /// The PostgreSQL pool, for tests; `None` on SQLite.
+    #[doc(hidden)]
+    pub fn postgres_pool(&self) -> Option<&PgPool> {
+        match &self.db {
+            Db::Sqlite(_) => None,
+            Db::Postgres(p) => Some(p),
+        }
     }
 }
 
-/// Column `name` of `row` as a `T`; a missing column or a value of another type is
-/// [`StoreError::Corrupt`].
-fn col<'r, T>(row: &'r SqliteRow, name: &str) -> Result<T, StoreError>
+/// A row of either backend, decoded by column name into the types the schema uses; a
+/// missing column or a value of another type is [`StoreError::Corrupt`] naming it.
+trait StoreRow {
+    fn int(&self, name: &str) -> Result<i64, StoreError>;
+    fn opt_int(&self, name: &str) -> Result<Option<i64>, StoreError>;
+    fn real(&self, name: &str) -> Result<f64, StoreError>;
+    fn opt_real(&self, name: &str) -> Result<Option<f64>, StoreError>;
+    fn text(&self, name: &str) -> Result<String, StoreError>;
+    fn opt_text(&self, name: &str) -> Result<Option<String>, StoreError>;
+    fn bytes(&self, name: &str) -> Result<Vec<u8>, StoreError>;
+
+    /// A non-negative integer column as a `u32`.
+    fn u32(&self, name: &str) -> Result<u32, StoreError> {
+        let v = self.int(name)?;
+        u32::try_from(v)
+            .map_err(|_| StoreError::Corrupt(format!("column `{name}`: {v} is not a u32")))
+    }
+
+    /// A nullable non-negative integer column as a `u32`.
+    fn opt_u32(&self, name: &str) -> Result<Option<u32>, StoreError> {
+        self.opt_int(name)?
+            .map(|v| {
+                u32::try_from(v)
+                    .map_err(|_| StoreError::Corrupt(format!("column `{name}`: {v} is not a u32")))
+            })
+            .transpose()
+    }
+
+    /// A JSON text column, decoded.
+    fn json<T: DeserializeOwned>(&self, name: &str) -> Result<T, StoreError> {
+        from_json(name, &self.text(name)?)
+    }
+
+    /// A nullable JSON text column, decoded (`NULL` is `None`).
+    fn opt_json<T: DeserializeOwned>(&self, name: &str) -> Result<Option<T>, StoreError> {
+        self.opt_text(name)?
+            .as_deref()
+            .map(|t| from_json(name, t))
+            .transpose()
+    }
+}
+
+/// [`StoreRow`] for a backend's row type.
+macro_rules! store_row {
+    ($row:ty) => {
+        impl StoreRow for $row {
+            fn int(&self, name: &str) -> Result<i64, StoreError> {
+                get(self, name)
+            }
+            fn opt_int(&self, name: &str) -> Result<Option<i64>, StoreError> {
+                get(self, name)
+            }
+            fn real(&self, name: &str) -> Result<f64, StoreError> {
+                get(self, name)
+            }
+            fn opt_real(&self, name: &str) -> Result<Option<f64>, StoreError> {
+                get(self, name)
+            }
+            fn text(&self, name: &str) -> Result<String, StoreError> {
+                get(self, name)
+            }
+            fn opt_text(&self, name: &str) -> Result<Option<String>, StoreError> {
+                get(self, name)
+            }
+            fn bytes(&self, name: &str) -> Result<Vec<u8>, StoreError> {
+                get(self, name)
+            }
+        }
+    };
+}
+store_row!(SqliteRow);
+store_row!(PgRow);
+
+/// Column `name` of `row` as a `T`.
+fn get<'r, R, T>(row: &'r R, name: &str) -> Result<T, StoreError>
 where
-    T: sqlx::Decode<'r, Sqlite> + sqlx::Type<Sqlite>,
+    R: Row,
+    for<'a> &'a str: sqlx::ColumnIndex<R>,
+    T: sqlx::Decode<'r, R::Database> + sqlx::Type<R::Database>,
 {
     row.try_get::<T, _>(name)
         .map_err(|e| StoreError::Corrupt(format!("column `{name}`: {e}")))
-}
-
-/// A non-negative integer column as a `u32`.
-fn col_u32(row: &SqliteRow, name: &str) -> Result<u32, StoreError> {
-    let v: i64 = col(row, name)?;
-    u32::try_from(v).map_err(|_| StoreError::Corrupt(format!("column `{name}`: {v} is not a u32")))
 }
 
 /// Parse the JSON text `text` of column `name`.
@@ -187,31 +539,38 @@ fn from_json<T: DeserializeOwned>(name: &str, text: &str) -> Result<T, StoreErro
         .map_err(|e| StoreError::Corrupt(format!("column `{name}` is not the expected JSON: {e}")))
 }
 
-/// A JSON text column, decoded.
-fn json_col<T: DeserializeOwned>(row: &SqliteRow, name: &str) -> Result<T, StoreError> {
-    let text: String = col(row, name)?;
-    from_json(name, &text)
-}
-
-/// A nullable JSON text column, decoded (`NULL` is `None`).
-fn opt_json_col<T: DeserializeOwned>(row: &SqliteRow, name: &str) -> Result<Option<T>, StoreError> {
-    let text: Option<String> = col(row, name)?;
-    text.as_deref().map(|t| from_json(name, t)).transpose()
-}
-
 /// Encode a value as JSON text for a column (our own types always encode).
 fn to_json<T: serde::Serialize>(what: &str, v: &T) -> Result<String, StoreError> {
     serde_json::to_string(v).map_err(|e| StoreError::Corrupt(format!("{what}: {e}")))
 }
 
 /// Delete a job's history rows and snapshots (a new attempt or a deletion).
-async fn delete_job_rows(conn: &mut sqlx::SqliteConnection, id: &str) -> Result<(), StoreError> {
+async fn delete_job_rows(tx: &mut Tx, id: &str) -> Result<(), StoreError> {
     for sql in [
-        "DELETE FROM energy WHERE job_id = ?",
-        "DELETE FROM crack_tips WHERE job_id = ?",
-        "DELETE FROM snapshots WHERE job_id = ?",
+        "DELETE FROM energy WHERE job_id = $1",
+        "DELETE FROM crack_tips WHERE job_id = $1",
+        "DELETE FROM snapshots WHERE job_id = $1",
     ] {
-        sqlx::query(sql).bind(id).execute(&mut *conn).await?;
+        on_tx!(tx, c => {
+            sqlx::query(sql).bind(id).execute(c).await?;
+        });
     }
     Ok(())
+}
+
+#[cfg(test)]
+mod tests {
+    use super::*;
+
+    #[test]
+    fn times_are_written_and_read_back_to_the_millisecond() {
+        let t = time::OffsetDateTime::from_unix_timestamp_nanos(1_796_186_731_123_456_789)
+            .expect("a time");
+        let s = time_text(t);
+        assert_eq!(s, "2026-12-02T04:45:31.123Z");
+        let back = parse_time_text(&s).expect("parses");
+        assert_eq!(back.unix_timestamp_nanos(), 1_796_186_731_123_000_000);
+        assert!(parse_time_text("2026-12-02 04:45:31").is_none());
+        assert!(parse_time_text("2026-13-02T04:45:31.123Z").is_none());
+    }
 }

@@ -1,24 +1,35 @@
-//! The durable queue: claims (one `UPDATE … RETURNING`, highest priority then oldest),
-//! leases extended by heartbeats and fenced writes, fencing tokens raised on every claim,
-//! the reaper of expired leases, and the release of running jobs at shutdown.
+//! The durable queue: claims (highest priority then oldest), leases extended by heartbeats
+//! and fenced writes, fencing tokens raised on every claim, the reaper of expired leases,
+//! and the release of running jobs at shutdown.
+//!
+//! The claim is the one query whose shape differs by backend. SQLite has one writer: one
+//! `UPDATE … WHERE seq = (SELECT … LIMIT 1) RETURNING *`. PostgreSQL has many connections
+//! claiming at once: the candidate is selected `FOR UPDATE OF q SKIP LOCKED` (a job another
+//! claim holds is skipped, not waited for), and when it belongs to a sweep with
+//! `max_concurrent` the sweep's row is locked and its running jobs counted again, so two
+//! claims never both take the sweep's last free place; then the `UPDATE`, all in one
+//! transaction.
 
 use std::time::Duration;
 
 use fracture_api::results::{Progress, RunStatus, Summary};
 
-use super::{JobRow, Store, StoreError, col, delete_job_rows, now_ms, to_json};
+use super::{
+    Backend, JobRow, Store, StoreError, StoreRow, Tx, delete_job_rows, now_ms, now_text, on_tx,
+    to_json,
+};
 
-/// The release of a dead worker's jobs (`?1` max attempts unless the job has its own, `?2` deterministic, `?3` the
-/// cause); the caller adds the `WHERE` clause.
+/// The release of a dead worker's jobs (`$1` max attempts unless the job has its own, `$2`
+/// deterministic, `$3` the cause, `$4` now); the caller adds the `WHERE` clause (from `$5`).
 const RELEASE: &str = "UPDATE jobs SET
     status = CASE WHEN cancel_requested != 0 THEN 'cancelled'
-                  WHEN ?2 OR attempts >= COALESCE(max_attempts, ?1) THEN 'failed' ELSE 'queued' END,
-    message = CASE WHEN cancel_requested != 0 THEN 'cancelled (its worker died: ' || ?3 || ')'
-                  WHEN ?2 THEN 'the worker running it died: ' || ?3
-                  WHEN attempts >= COALESCE(max_attempts, ?1) THEN 'the worker running it died (attempt ' || attempts || ' of ' || COALESCE(max_attempts, ?1) || '; giving up): ' || ?3
-                  ELSE 're-queued: the worker running it died: ' || ?3 END,
-    finished_at = CASE WHEN cancel_requested != 0 OR ?2 OR attempts >= COALESCE(max_attempts, ?1)
-                       THEN strftime('%Y-%m-%dT%H:%M:%fZ','now') ELSE NULL END,
+                  WHEN $2 OR attempts >= COALESCE(max_attempts, $1) THEN 'failed' ELSE 'queued' END,
+    message = CASE WHEN cancel_requested != 0 THEN 'cancelled (its worker died: ' || $3 || ')'
+                  WHEN $2 THEN 'the worker running it died: ' || $3
+                  WHEN attempts >= COALESCE(max_attempts, $1) THEN 'the worker running it died (attempt ' || attempts || ' of ' || COALESCE(max_attempts, $1) || '; giving up): ' || $3
+                  ELSE 're-queued: the worker running it died: ' || $3 END,
+    finished_at = CASE WHEN cancel_requested != 0 OR $2 OR attempts >= COALESCE(max_attempts, $1)
+                       THEN $4 ELSE NULL END,
     worker_id = NULL, lease_until_ms = NULL";
 
 /// Where a resumed job's history continues (its checkpoint's position).
@@ -31,6 +42,24 @@ pub struct HistoryCursor {
     /// Snapshots taken by then: snapshots with this index or more are deleted.
     pub snapshots: u32,
 }
+
+/// The claim's update of the chosen job (`$1` worker, `$2` lease end, `$3` now); the
+/// caller adds the `WHERE` clause.
+const CLAIM_SET: &str = "UPDATE jobs SET status = 'running', attempts = attempts + 1,
+        fence = fence + 1, worker_id = $1, lease_until_ms = $2, message = NULL,
+        progress = NULL, started_at = $3";
+
+/// The best claimable job (after the caller's `SELECT` list): queued, not of a sweep that
+/// has `max_concurrent` of its jobs running; highest priority, then oldest.
+const CANDIDATE: &str = "FROM jobs q LEFT JOIN sweeps s ON s.id = q.sweep_id
+     WHERE q.status = 'queued'
+       AND (s.max_concurrent IS NULL
+            OR (SELECT COUNT(*) FROM jobs r WHERE r.sweep_id = q.sweep_id
+                  AND r.status = 'running') < s.max_concurrent)
+     ORDER BY q.priority DESC, q.seq ASC LIMIT 1";
+
+/// PostgreSQL: claims retried when the sweep of their candidate filled up meanwhile.
+const PG_CLAIM_TRIES: usize = 8;
 
 /// A successful claim.
 #[derive(Debug, Clone)]
@@ -50,27 +79,93 @@ impl Store {
         lease: Duration,
     ) -> Result<Option<Claimed>, StoreError> {
         let until = now_ms() + lease.as_millis() as i64;
-        let mut tx = self.pool.begin().await?;
-        let row = sqlx::query(
-            "UPDATE jobs SET status = 'running', attempts = attempts + 1, fence = fence + 1,
-                worker_id = ?, lease_until_ms = ?, message = NULL, progress = NULL,
-                started_at = strftime('%Y-%m-%dT%H:%M:%fZ','now')
-             WHERE seq = (SELECT q.seq FROM jobs q LEFT JOIN sweeps s ON s.id = q.sweep_id
-                          WHERE q.status = 'queued'
-                            AND (s.max_concurrent IS NULL
-                                 OR (SELECT COUNT(*) FROM jobs r WHERE r.sweep_id = q.sweep_id
-                                       AND r.status = 'running') < s.max_concurrent)
-                          ORDER BY q.priority DESC, q.seq ASC LIMIT 1)
-               AND status = 'queued'
-             RETURNING *",
-        )
-        .bind(worker)
-        .bind(until)
-        .fetch_optional(&mut *tx)
-        .await?;
-        let job = row.as_ref().map(JobRow::decode).transpose()?;
-        tx.commit().await?;
+        let now = now_text();
+        let job = match self.db.backend() {
+            Backend::Sqlite => {
+                let mut tx = self.db.begin().await?;
+                // Constant text: the update and the candidate query above.
+                let sql = format!(
+                    "{CLAIM_SET} WHERE seq = (SELECT q.seq {CANDIDATE}) AND status = 'queued'
+                     RETURNING *"
+                );
+                let job = on_tx!(&mut tx, c => sqlx::query(sqlx::AssertSqlSafe(sql))
+                    .bind(worker)
+                    .bind(until)
+                    .bind(&now)
+                    .fetch_optional(c)
+                    .await?
+                    .as_ref()
+                    .map(JobRow::decode)
+                    .transpose()?);
+                tx.commit().await?;
+                job
+            }
+            Backend::Postgres => self.claim_postgres(worker, until, &now).await?,
+        };
         Ok(job.map(|job| Claimed { job }))
+    }
+
+    /// The claim on PostgreSQL (see the module's documentation).
+    async fn claim_postgres(
+        &self,
+        worker: &str,
+        until: i64,
+        now: &str,
+    ) -> Result<Option<JobRow>, StoreError> {
+        let candidate = format!(
+            "SELECT q.seq, q.sweep_id, s.max_concurrent {CANDIDATE} FOR UPDATE OF q SKIP LOCKED"
+        );
+        let update = format!("{CLAIM_SET} WHERE seq = $4 AND status = 'queued' RETURNING *");
+        for _ in 0..PG_CLAIM_TRIES {
+            let mut tx = self.db.begin().await?;
+            // Constant text: the candidate query above.
+            let row = on_tx!(&mut tx, c => {
+                match sqlx::query(sqlx::AssertSqlSafe(candidate.clone()))
+                    .fetch_optional(c)
+                    .await?
+                {
+                    None => None,
+                    Some(r) => Some((r.int("seq")?, r.opt_text("sweep_id")?, r.opt_int("max_concurrent")?)),
+                }
+            });
+            let Some((seq, sweep, cap)) = row else {
+                return Ok(None);
+            };
+            if let (Some(sweep), Some(cap)) = (sweep, cap) {
+                // Claims of this sweep's jobs wait for each other here; a fresh count sees
+                // the jobs the others claimed (READ COMMITTED: each statement its snapshot).
+                let running: i64 = on_tx!(&mut tx, c => {
+                    sqlx::query("SELECT 1 FROM sweeps WHERE id = $1 FOR UPDATE")
+                        .bind(&sweep)
+                        .execute(&mut *c)
+                        .await?;
+                    sqlx::query_scalar(
+                        "SELECT COUNT(*) FROM jobs WHERE sweep_id = $1 AND status = 'running'",
+                    )
+                    .bind(&sweep)
+                    .fetch_one(&mut *c)
+                    .await?
+                });
+                if running >= cap {
+                    drop(tx); // rolled back: the candidate goes back to the others
+                    continue;
+                }
+            }
+            // Constant text: the update above.
+            let job = on_tx!(&mut tx, c => sqlx::query(sqlx::AssertSqlSafe(update.clone()))
+                .bind(worker)
+                .bind(until)
+                .bind(now)
+                .bind(seq)
+                .fetch_optional(c)
+                .await?
+                .as_ref()
+                .map(JobRow::decode)
+                .transpose()?);
+            tx.commit().await?;
+            return Ok(job);
+        }
+        Ok(None)
     }
 
     /// The history a new claim under `fence` starts from: the rows and snapshots of earlier
@@ -84,34 +179,33 @@ impl Store {
         lease: Duration,
         keep: Option<HistoryCursor>,
     ) -> Result<(), StoreError> {
-        let mut tx = self.pool.begin().await?;
+        let mut tx = self.db.begin().await?;
         Self::fence_check(&mut tx, id, fence, lease).await?;
         match keep {
             None => delete_job_rows(&mut tx, id).await?,
             Some(k) => {
-                for sql in [
-                    "DELETE FROM energy WHERE job_id = ? AND time > ?",
-                    "DELETE FROM crack_tips WHERE job_id = ? AND time > ?",
-                ] {
-                    sqlx::query(sql)
+                let message = format!(
+                    "resumed from its checkpoint at step {} (t = {:e} s)",
+                    k.step, k.time
+                );
+                on_tx!(&mut tx, c => {
+                    for sql in [
+                        "DELETE FROM energy WHERE job_id = $1 AND time > $2",
+                        "DELETE FROM crack_tips WHERE job_id = $1 AND time > $2",
+                    ] {
+                        sqlx::query(sql).bind(id).bind(k.time).execute(&mut *c).await?;
+                    }
+                    sqlx::query("DELETE FROM snapshots WHERE job_id = $1 AND idx >= $2")
                         .bind(id)
-                        .bind(k.time)
-                        .execute(&mut *tx)
+                        .bind(i64::from(k.snapshots))
+                        .execute(&mut *c)
                         .await?;
-                }
-                sqlx::query("DELETE FROM snapshots WHERE job_id = ? AND idx >= ?")
-                    .bind(id)
-                    .bind(i64::from(k.snapshots))
-                    .execute(&mut *tx)
-                    .await?;
-                sqlx::query("UPDATE jobs SET message = ? WHERE id = ?")
-                    .bind(format!(
-                        "resumed from its checkpoint at step {} (t = {:e} s)",
-                        k.step, k.time
-                    ))
-                    .bind(id)
-                    .execute(&mut *tx)
-                    .await?;
+                    sqlx::query("UPDATE jobs SET message = $1 WHERE id = $2")
+                        .bind(&message)
+                        .bind(id)
+                        .execute(&mut *c)
+                        .await?;
+                });
             }
         }
         tx.commit().await?;
@@ -119,28 +213,31 @@ impl Store {
     }
 
     /// Extend the lease of a job running under `fence` (the first statement of a fenced
-    /// write, so the transaction holds the write lock from its start). Returns whether
-    /// cancellation was asked.
+    /// write, so the transaction holds the job's row, and on SQLite the write lock, from
+    /// its start). Returns whether cancellation was asked.
     pub(super) async fn fence_check(
-        conn: &mut sqlx::SqliteConnection,
+        tx: &mut Tx,
         id: &str,
         fence: i64,
         lease: Duration,
     ) -> Result<bool, StoreError> {
         let until = now_ms() + lease.as_millis() as i64;
-        let row = sqlx::query(
-            "UPDATE jobs SET lease_until_ms = MAX(COALESCE(lease_until_ms, 0), ?)
-             WHERE id = ? AND fence = ? AND status = 'running'
+        let row = on_tx!(tx, c => sqlx::query(
+            "UPDATE jobs SET lease_until_ms = CASE WHEN COALESCE(lease_until_ms, 0) > $1
+                                                   THEN lease_until_ms ELSE $1 END
+             WHERE id = $2 AND fence = $3 AND status = 'running'
              RETURNING cancel_requested",
         )
         .bind(until)
         .bind(id)
         .bind(fence)
-        .fetch_optional(&mut *conn)
-        .await?;
+        .fetch_optional(c)
+        .await?
+        .map(|r| r.int("cancel_requested"))
+        .transpose()?);
         match row {
             None => Err(StoreError::Fenced),
-            Some(r) => Ok(col::<i64>(&r, "cancel_requested")? != 0),
+            Some(c) => Ok(c != 0),
         }
     }
 
@@ -154,22 +251,24 @@ impl Store {
     ) -> Result<bool, StoreError> {
         let until = now_ms() + lease.as_millis() as i64;
         let p = progress.map(|p| to_json("progress", p)).transpose()?;
-        let mut tx = self.pool.begin().await?;
-        let row = sqlx::query(
-            "UPDATE jobs SET lease_until_ms = ?, progress = COALESCE(?, progress)
-             WHERE id = ? AND fence = ? AND status = 'running'
+        let mut tx = self.db.begin().await?;
+        let row = on_tx!(&mut tx, c => sqlx::query(
+            "UPDATE jobs SET lease_until_ms = $1, progress = COALESCE($2, progress)
+             WHERE id = $3 AND fence = $4 AND status = 'running'
              RETURNING cancel_requested",
         )
         .bind(until)
         .bind(p)
         .bind(id)
         .bind(fence)
-        .fetch_optional(&mut *tx)
-        .await?;
+        .fetch_optional(c)
+        .await?
+        .map(|r| r.int("cancel_requested"))
+        .transpose()?);
         tx.commit().await?;
         match row {
             None => Err(StoreError::Fenced),
-            Some(r) => Ok(col::<i64>(&r, "cancel_requested")? != 0),
+            Some(c) => Ok(c != 0),
         }
     }
 
@@ -185,52 +284,55 @@ impl Store {
             RunStatus::Failed => "failed",
             RunStatus::Cancelled => "cancelled",
         };
-        let mut tx = self.pool.begin().await?;
-        let row = sqlx::query(
-            "UPDATE jobs SET status = ?, summary = ?, message = ?, worker_id = NULL,
-                lease_until_ms = NULL, finished_at = strftime('%Y-%m-%dT%H:%M:%fZ','now')
-             WHERE id = ? AND fence = ? AND status = 'running'
+        let summary_json = to_json("summary", summary)?;
+        let now = now_text();
+        let mut tx = self.db.begin().await?;
+        let row = on_tx!(&mut tx, c => sqlx::query(
+            "UPDATE jobs SET status = $1, summary = $2, message = $3, worker_id = NULL,
+                lease_until_ms = NULL, finished_at = $4
+             WHERE id = $5 AND fence = $6 AND status = 'running'
              RETURNING *",
         )
         .bind(status)
-        .bind(to_json("summary", summary)?)
+        .bind(&summary_json)
         .bind(summary.message.clone())
+        .bind(&now)
         .bind(id)
         .bind(fence)
-        .fetch_optional(&mut *tx)
-        .await?;
+        .fetch_optional(c)
+        .await?
+        .as_ref()
+        .map(JobRow::decode)
+        .transpose()?);
         tx.commit().await?;
-        row.as_ref()
-            .map(JobRow::decode)
-            .transpose()?
-            .ok_or(StoreError::Fenced)
+        row.ok_or(StoreError::Fenced)
     }
 
     /// Re-queue (or fail, past the attempt limit; or cancel, if asked) running jobs whose
     /// lease has expired. Returns the changed jobs.
     pub async fn reap(&self, max_attempts: u32) -> Result<Vec<JobRow>, StoreError> {
-        let mut tx = self.pool.begin().await?;
-        let rows = sqlx::query(
+        let now = now_text();
+        let mut tx = self.db.begin().await?;
+        let rows = on_tx!(&mut tx, c => JobRow::decode_all(&sqlx::query(
             "UPDATE jobs SET
                 status = CASE WHEN cancel_requested != 0 THEN 'cancelled'
-                              WHEN attempts >= COALESCE(max_attempts, ?) THEN 'failed' ELSE 'queued' END,
+                              WHEN attempts >= COALESCE(max_attempts, $1) THEN 'failed' ELSE 'queued' END,
                 message = CASE WHEN cancel_requested != 0 THEN 'cancelled (its worker stopped answering)'
-                              WHEN attempts >= COALESCE(max_attempts, ?) THEN 'the worker was lost ' || attempts || ' times (lease expired); giving up'
+                              WHEN attempts >= COALESCE(max_attempts, $1) THEN 'the worker was lost ' || attempts || ' times (lease expired); giving up'
                               ELSE 'the worker was lost (lease expired); re-queued' END,
-                finished_at = CASE WHEN cancel_requested != 0 OR attempts >= COALESCE(max_attempts, ?)
-                                   THEN strftime('%Y-%m-%dT%H:%M:%fZ','now') ELSE NULL END,
+                finished_at = CASE WHEN cancel_requested != 0 OR attempts >= COALESCE(max_attempts, $1)
+                                   THEN $3 ELSE NULL END,
                 worker_id = NULL, lease_until_ms = NULL
-             WHERE status = 'running' AND lease_until_ms < ?
+             WHERE status = 'running' AND lease_until_ms < $2
              RETURNING *",
         )
         .bind(max_attempts as i64)
-        .bind(max_attempts as i64)
-        .bind(max_attempts as i64)
         .bind(now_ms())
-        .fetch_all(&mut *tx)
-        .await?;
+        .bind(&now)
+        .fetch_all(c)
+        .await?)?);
         tx.commit().await?;
-        JobRow::decode_all(&rows)
+        Ok(rows)
     }
 
     /// Release the running jobs of a worker that is known to be dead (a local worker process
@@ -245,20 +347,24 @@ impl Store {
         max_attempts: u32,
         deterministic: bool,
     ) -> Result<Vec<JobRow>, StoreError> {
-        let mut tx = self.pool.begin().await?;
+        let now = now_text();
+        let mut tx = self.db.begin().await?;
         // Constant text: only the WHERE clause differs between the two releases.
         let sql = format!(
-            "{RELEASE} WHERE status = 'running' AND substr(worker_id, 1, length(?4)) = ?4 RETURNING *"
+            "{RELEASE} WHERE status = 'running' AND substr(worker_id, 1, length($5)) = $5 RETURNING *"
         );
-        let rows = sqlx::query(sqlx::AssertSqlSafe(sql))
-            .bind(max_attempts as i64)
-            .bind(deterministic)
-            .bind(cause)
-            .bind(worker_prefix)
-            .fetch_all(&mut *tx)
-            .await?;
+        let rows = on_tx!(&mut tx, c => JobRow::decode_all(
+            &sqlx::query(sqlx::AssertSqlSafe(sql))
+                .bind(max_attempts as i64)
+                .bind(deterministic)
+                .bind(cause)
+                .bind(&now)
+                .bind(worker_prefix)
+                .fetch_all(c)
+                .await?,
+        )?);
         tx.commit().await?;
-        JobRow::decode_all(&rows)
+        Ok(rows)
     }
 
     /// Release one claim of a dead worker (reported by a remote worker's supervisor), with
@@ -272,23 +378,25 @@ impl Store {
         max_attempts: u32,
         deterministic: bool,
     ) -> Result<JobRow, StoreError> {
-        let mut tx = self.pool.begin().await?;
+        let now = now_text();
+        let mut tx = self.db.begin().await?;
         // Constant text: only the WHERE clause differs between the two releases.
         let sql =
-            format!("{RELEASE} WHERE status = 'running' AND id = ?4 AND fence = ?5 RETURNING *");
-        let row = sqlx::query(sqlx::AssertSqlSafe(sql))
+            format!("{RELEASE} WHERE status = 'running' AND id = $5 AND fence = $6 RETURNING *");
+        let row = on_tx!(&mut tx, c => sqlx::query(sqlx::AssertSqlSafe(sql))
             .bind(max_attempts as i64)
             .bind(deterministic)
             .bind(cause)
+            .bind(&now)
             .bind(id)
             .bind(fence)
-            .fetch_optional(&mut *tx)
-            .await?;
-        tx.commit().await?;
-        row.as_ref()
+            .fetch_optional(c)
+            .await?
+            .as_ref()
             .map(JobRow::decode)
-            .transpose()?
-            .ok_or(StoreError::Fenced)
+            .transpose()?);
+        tx.commit().await?;
+        row.ok_or(StoreError::Fenced)
     }
 
     /// A worker hands its claim back (a batch worker stopping before its time limit): the
@@ -301,47 +409,49 @@ impl Store {
         fence: i64,
         message: &str,
     ) -> Result<JobRow, StoreError> {
-        let mut tx = self.pool.begin().await?;
-        let row = sqlx::query(
+        let now = now_text();
+        let mut tx = self.db.begin().await?;
+        let job = on_tx!(&mut tx, c => sqlx::query(
             "UPDATE jobs SET
                 status = CASE WHEN cancel_requested != 0 THEN 'cancelled' ELSE 'queued' END,
-                finished_at = CASE WHEN cancel_requested != 0
-                                   THEN strftime('%Y-%m-%dT%H:%M:%fZ','now') ELSE NULL END,
-                attempts = MAX(attempts - 1, 0), message = ?,
+                finished_at = CASE WHEN cancel_requested != 0 THEN $4 ELSE NULL END,
+                attempts = CASE WHEN attempts > 0 THEN attempts - 1 ELSE 0 END, message = $1,
                 worker_id = NULL, lease_until_ms = NULL
-             WHERE id = ? AND fence = ? AND status = 'running'
+             WHERE id = $2 AND fence = $3 AND status = 'running'
              RETURNING *",
         )
         .bind(message)
         .bind(id)
         .bind(fence)
-        .fetch_optional(&mut *tx)
-        .await?;
+        .bind(&now)
+        .fetch_optional(c)
+        .await?
+        .as_ref()
+        .map(JobRow::decode)
+        .transpose()?);
         tx.commit().await?;
-        row.as_ref()
-            .map(JobRow::decode)
-            .transpose()?
-            .ok_or(StoreError::Fenced)
+        job.ok_or(StoreError::Fenced)
     }
 
     /// Put every running job back in the queue without counting the attempt (shutdown of
     /// this server, or recovery at start). Later writes of their workers are fenced off.
     pub async fn release_running(&self, reason: &str) -> Result<Vec<JobRow>, StoreError> {
-        let mut tx = self.pool.begin().await?;
-        let rows = sqlx::query(
+        let now = now_text();
+        let mut tx = self.db.begin().await?;
+        let rows = on_tx!(&mut tx, c => JobRow::decode_all(&sqlx::query(
             "UPDATE jobs SET
                 status = CASE WHEN cancel_requested != 0 THEN 'cancelled' ELSE 'queued' END,
-                finished_at = CASE WHEN cancel_requested != 0
-                                   THEN strftime('%Y-%m-%dT%H:%M:%fZ','now') ELSE NULL END,
-                attempts = MAX(attempts - 1, 0), message = ?,
+                finished_at = CASE WHEN cancel_requested != 0 THEN $2 ELSE NULL END,
+                attempts = CASE WHEN attempts > 0 THEN attempts - 1 ELSE 0 END, message = $1,
                 worker_id = NULL, lease_until_ms = NULL
              WHERE status = 'running'
              RETURNING *",
         )
         .bind(reason)
-        .fetch_all(&mut *tx)
-        .await?;
+        .bind(&now)
+        .fetch_all(c)
+        .await?)?);
         tx.commit().await?;
-        JobRow::decode_all(&rows)
+        Ok(rows)
     }
 }

@@ -4,13 +4,12 @@
 
 use std::collections::BTreeMap;
 
-use fracture_api::sweep::SweepParameter;
-use sqlx::sqlite::SqliteRow;
-
 use super::jobs::insert_job;
 use super::{
-    JobRow, NewJob, Store, StoreError, col, delete_job_rows, from_json, json_col, to_json,
+    Db, JobRow, NewJob, Store, StoreError, StoreRow, Tx, delete_job_rows, from_json, now_text,
+    on_db, on_tx, to_json,
 };
+use fracture_api::sweep::SweepParameter;
 
 /// A sweep as stored, decoded.
 #[derive(Debug, Clone)]
@@ -36,23 +35,17 @@ pub struct SweepRow {
 }
 
 impl SweepRow {
-    fn decode(r: &SqliteRow) -> Result<SweepRow, StoreError> {
+    fn decode(r: &impl StoreRow) -> Result<SweepRow, StoreError> {
         Ok(SweepRow {
-            seq: col(r, "seq")?,
-            id: col(r, "id")?,
-            name: col(r, "name")?,
-            scene: col(r, "scene")?,
-            parameters: json_col(r, "parameters")?,
-            priority: col(r, "priority")?,
-            labels: json_col(r, "labels")?,
-            created_at: col(r, "created_at")?,
-            max_concurrent: col::<Option<i64>>(r, "max_concurrent")?
-                .map(|n| {
-                    u32::try_from(n).map_err(|_| {
-                        StoreError::Corrupt(format!("column `max_concurrent`: {n} is not a u32"))
-                    })
-                })
-                .transpose()?,
+            seq: r.int("seq")?,
+            id: r.text("id")?,
+            name: r.text("name")?,
+            scene: r.text("scene")?,
+            parameters: r.json("parameters")?,
+            priority: r.int("priority")?,
+            labels: r.json("labels")?,
+            created_at: r.text("created_at")?,
+            max_concurrent: r.opt_u32("max_concurrent")?,
         })
     }
 
@@ -100,23 +93,26 @@ impl Store {
         sw: &NewSweep,
         jobs: &[NewSweepJob],
     ) -> Result<SweepRow, StoreError> {
-        let mut tx = self.pool.begin().await?;
-        let row = sqlx::query(
+        let parameters = to_json("parameters", &sw.parameters)?;
+        let labels = to_json("labels", &sw.labels)?;
+        let now = now_text();
+        let mut tx = self.db.begin().await?;
+        let row = on_tx!(&mut tx, c => SweepRow::decode(&sqlx::query(
             "INSERT INTO sweeps (id, name, scene, parameters, priority, labels, created_at,
                                  max_concurrent)
-             VALUES (?, ?, ?, ?, ?, ?, strftime('%Y-%m-%dT%H:%M:%fZ','now'), ?)
+             VALUES ($1, $2, $3, $4, $5, $6, $7, $8)
              RETURNING *",
         )
         .bind(&sw.id)
         .bind(&sw.name)
         .bind(&sw.scene)
-        .bind(to_json("parameters", &sw.parameters)?)
+        .bind(&parameters)
         .bind(sw.priority)
-        .bind(to_json("labels", &sw.labels)?)
+        .bind(&labels)
+        .bind(&now)
         .bind(sw.max_concurrent.map(i64::from))
-        .fetch_one(&mut *tx)
-        .await?;
-        let row = SweepRow::decode(&row)?;
+        .fetch_one(c)
+        .await?)?);
         for (i, j) in jobs.iter().enumerate() {
             insert_job(
                 &mut tx,
@@ -131,13 +127,13 @@ impl Store {
 
     /// One sweep.
     pub async fn sweep(&self, id: &str) -> Result<Option<SweepRow>, StoreError> {
-        sqlx::query("SELECT * FROM sweeps WHERE id = ?")
+        on_db!(&self.db, c => sqlx::query("SELECT * FROM sweeps WHERE id = $1")
             .bind(id)
-            .fetch_optional(&self.pool)
+            .fetch_optional(c)
             .await?
             .as_ref()
             .map(SweepRow::decode)
-            .transpose()
+            .transpose())
     }
 
     /// Sweeps, newest first: at most `limit`, older than `before_seq` when given.
@@ -146,44 +142,48 @@ impl Store {
         limit: i64,
         before_seq: Option<i64>,
     ) -> Result<Vec<SweepRow>, StoreError> {
-        let rows = sqlx::query(
-            "SELECT * FROM sweeps WHERE (? IS NULL OR seq < ?) ORDER BY seq DESC LIMIT ?",
+        on_db!(&self.db, c => sqlx::query(
+            "SELECT * FROM sweeps WHERE ($1 IS NULL OR seq < $1) ORDER BY seq DESC LIMIT $2",
         )
         .bind(before_seq)
-        .bind(before_seq)
         .bind(limit)
-        .fetch_all(&self.pool)
-        .await?;
-        rows.iter().map(SweepRow::decode).collect()
+        .fetch_all(c)
+        .await?
+        .iter()
+        .map(SweepRow::decode)
+        .collect())
     }
 
     /// The jobs of a sweep, in the order of its combinations.
     pub async fn sweep_jobs(&self, id: &str) -> Result<Vec<JobRow>, StoreError> {
-        let rows = sqlx::query("SELECT * FROM jobs WHERE sweep_id = ? ORDER BY sweep_index, seq")
-            .bind(id)
-            .fetch_all(&self.pool)
-            .await?;
-        JobRow::decode_all(&rows)
+        on_db!(&self.db, c => JobRow::decode_all(
+            &sqlx::query("SELECT * FROM jobs WHERE sweep_id = $1 ORDER BY sweep_index, seq")
+                .bind(id)
+                .fetch_all(c)
+                .await?,
+        ))
     }
 
     /// Delete a sweep and its finished jobs (with their rows) in one transaction; returns
     /// the ids of the deleted jobs. Unfinished jobs are left (the caller refuses those).
     pub async fn delete_sweep(&self, id: &str) -> Result<Vec<String>, StoreError> {
-        let mut tx = self.pool.begin().await?;
-        let ids: Vec<String> = sqlx::query_scalar(
-            "DELETE FROM jobs WHERE sweep_id = ? AND status IN ('completed', 'failed', 'cancelled')
+        let mut tx = self.db.begin().await?;
+        let ids: Vec<String> = on_tx!(&mut tx, c => sqlx::query_scalar(
+            "DELETE FROM jobs WHERE sweep_id = $1 AND status IN ('completed', 'failed', 'cancelled')
              RETURNING id",
         )
         .bind(id)
-        .fetch_all(&mut *tx)
-        .await?;
+        .fetch_all(c)
+        .await?);
         for jid in &ids {
             delete_job_rows(&mut tx, jid).await?;
         }
-        sqlx::query("DELETE FROM sweeps WHERE id = ?")
-            .bind(id)
-            .execute(&mut *tx)
-            .await?;
+        on_tx!(&mut tx, c => {
+            sqlx::query("DELETE FROM sweeps WHERE id = $1")
+                .bind(id)
+                .execute(c)
+                .await?;
+        });
         tx.commit().await?;
         Ok(ids)
     }
