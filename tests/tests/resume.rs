@@ -175,18 +175,7 @@ fn a_killed_workers_job_resumes_from_its_checkpoint_as_if_never_interrupted() {
 
     // It resumed from a checkpoint at or after the one seen, not from step 0.
     let log = std::fs::read_to_string(dir.path().join("server.log")).expect("server log");
-    let resumed: Vec<u64> = log
-        .lines()
-        .filter(|l| l.contains("resuming from its checkpoint") && l.contains(&id))
-        .filter_map(|l| {
-            l.split("step=")
-                .nth(1)?
-                .split(|c: char| !c.is_ascii_digit())
-                .next()?
-                .parse()
-                .ok()
-        })
-        .collect();
+    let resumed = fracture_e2e::resumed_steps(dir.path(), &id);
     assert_eq!(resumed.len(), 1, "one resume expected:\n{log}");
     let from = resumed[0];
     assert!(
