@@ -19,7 +19,7 @@ use std::time::Duration;
 use fracture_api::jobs::JobStatus;
 use fracture_api::results::{CrackTipRow, EnergyRow, Progress, RunStatus, Snapshot, Summary};
 use fracture_server::store::{
-    Backend, ListFilter, NewJob, NewSweep, NewSweepJob, Store, StoreError,
+    Backend, HistoryCursor, ListFilter, NewJob, NewSweep, NewSweepJob, Store, StoreError,
 };
 
 const LEASE: Duration = Duration::from_secs(30);
@@ -279,6 +279,11 @@ async fn lease_expiry_reaper_and_attempt_limit(store: Store) {
 
     let c2 = store.claim("w2", short).await.unwrap().unwrap().job;
     assert_eq!((c2.attempts, c2.fence), (2, c1.fence + 1));
+    // The claim route rewinds the history (to the checkpoint, here none: all of it).
+    store
+        .rewind_history(&c2.id, c2.fence, short, None)
+        .await
+        .unwrap();
     assert_eq!(
         store.row_counts("j").await.unwrap(),
         (0, 0, 0),
@@ -754,6 +759,88 @@ async fn second_server_on_the_same_database_is_refused(store: Store, url: &str) 
     again.close().await;
 }
 
+/// A batch worker's hand back (the job queued again, the attempt not counted, a stale
+/// fence refused) and the history a resumed claim starts from: rows after the checkpoint's
+/// time deleted, those before kept, the message saying where it resumes; without a
+/// checkpoint every row goes. The zone-front columns round-trip.
+async fn hand_back_and_rewind_history(store: Store) {
+    store.create_job(&job("h", 0)).await.unwrap();
+    let (h, f1) = claim_id(&store, "w").await.unwrap();
+    let rows: Vec<EnergyRow> = [1e-6, 2e-6, 3e-6]
+        .iter()
+        .map(|&time| EnergyRow {
+            time,
+            kinetic: 1.0,
+            ..EnergyRow::default()
+        })
+        .collect();
+    store.append_energy(&h, f1, LEASE, &rows).await.unwrap();
+    let tips: Vec<CrackTipRow> = [1e-6, 3e-6]
+        .iter()
+        .map(|&time| CrackTipRow {
+            time,
+            crack: 1,
+            tip: 1,
+            zone_x: 0.021,
+            zone_y: f64::NAN,
+            ..CrackTipRow::default()
+        })
+        .collect();
+    store.append_crack_tips(&h, f1, LEASE, &tips).await.unwrap();
+    let back = store.crack_tips(&h, None).await.unwrap();
+    assert_eq!(back.len(), 2);
+    assert_eq!(back[0].zone_x, 0.021);
+    assert!(back[0].zone_y.is_nan());
+
+    let j = store
+        .hand_back(&h, f1, "handed back (SIGUSR1)")
+        .await
+        .unwrap();
+    assert_eq!((j.status, j.attempts), (JobStatus::Queued, 0));
+    assert_eq!(j.message.as_deref(), Some("handed back (SIGUSR1)"));
+    assert!(matches!(
+        store.hand_back(&h, f1, "again").await,
+        Err(StoreError::Fenced)
+    ));
+    // The claim itself keeps the rows: the claim route rewinds them to the checkpoint.
+    let (h2, f2) = claim_id(&store, "w2").await.unwrap();
+    assert_eq!(h2, h);
+    assert_eq!(store.energy(&h, None).await.unwrap().len(), 3);
+    let keep = HistoryCursor {
+        step: 20,
+        time: 2e-6,
+        snapshots: 0,
+    };
+    assert!(matches!(
+        store.rewind_history(&h, f1, LEASE, Some(keep)).await,
+        Err(StoreError::Fenced)
+    ));
+    store
+        .rewind_history(&h, f2, LEASE, Some(keep))
+        .await
+        .unwrap();
+    let left: Vec<f64> = store
+        .energy(&h, None)
+        .await
+        .unwrap()
+        .iter()
+        .map(|r| r.time)
+        .collect();
+    assert_eq!(left, vec![1e-6, 2e-6]);
+    assert_eq!(store.crack_tips(&h, None).await.unwrap().len(), 1);
+    let j = store.get(&h).await.unwrap().unwrap();
+    assert!(
+        j.message
+            .as_deref()
+            .is_some_and(|m| m.starts_with("resumed from its checkpoint at step 20")),
+        "{:?}",
+        j.message
+    );
+    store.rewind_history(&h, f2, LEASE, None).await.unwrap();
+    assert!(store.energy(&h, None).await.unwrap().is_empty());
+    assert!(store.crack_tips(&h, None).await.unwrap().is_empty());
+}
+
 /// One `#[tokio::test]` per case and backend.
 macro_rules! on_both {
     ($($case:ident),* $(,)?) => {
@@ -795,6 +882,7 @@ on_both!(
     delete_and_metrics,
     parallel_claims_never_take_a_job_twice,
     parallel_claims_keep_a_sweeps_limit,
+    hand_back_and_rewind_history,
 );
 
 #[tokio::test(flavor = "multi_thread", worker_threads = 2)]
