@@ -12,8 +12,6 @@
 use std::collections::HashMap;
 use std::fmt::Write as _;
 use std::path::{Path, PathBuf};
-use std::sync::Mutex;
-use std::sync::atomic::{AtomicUsize, Ordering};
 use std::time::Instant;
 
 use anyhow::Context;
@@ -25,13 +23,11 @@ use fracture_api::validate::{scene_from_value, validate as validate_scene};
 use serde_json::{Value, json};
 
 use super::figures::speed_plot;
-use super::measure::{FRINGE_TIMES, Measured, run_one};
-use super::sweeps::{mid_cell_y, mm};
-use super::{StudyArgs, read_json};
+use super::measure::{FRINGE_TIMES, Measured};
+use super::sweeps::{EDGE_FACTOR, mid_cell_y, mm};
+use super::{Job, StudyArgs, read_json, run_jobs};
 use crate::report::{csv_line, markdown_header, markdown_row, markdown_table, write_file};
 
-/// Impedance-matching factor of a steel projectile on Homalite (`reference-solutions.md`).
-const EDGE_FACTOR: f64 = 0.93;
 /// The base bond: shear (and normal) strength (Pa) and toughness (J/m²) of the scene.
 const TAU: f64 = 30.0e6;
 const G_C: f64 = 1000.0;
@@ -354,53 +350,32 @@ pub(super) fn run(setup: &Setup) -> anyhow::Result<PathBuf> {
     let shear = speeds.c_s * speeds.c_s * mat.density();
     let end = scene0.time.end;
     let sweeps = cohesive_sweeps(scene0.grid.cell_size, a.cohesive_min_cell);
-    // Distinct runs, the largest first.
-    let mut jobs: Vec<(String, String, Scene, f64)> = Vec::new();
+    // Distinct runs.
+    let mut jobs: Vec<Job> = Vec::new();
     for sw in &sweeps {
         for b in &sw.runs {
-            if jobs.iter().any(|j| j.0 == b.key()) {
+            if jobs.iter().any(|j| j.key == b.key()) {
                 continue;
             }
             let snaps = sw.fringes || (b.h.is_none() && *b == Bond::base());
-            let sc = cohesive_scene(&base, b, end, snaps)
+            let scene = cohesive_scene(&base, b, end, snaps)
                 .with_context(|| format!("{} {}", sw.id, b.label()))?;
-            let h = sc.grid.cell_size;
-            let cost =
-                (sc.grid.max[0] - sc.grid.min[0]) * (sc.grid.max[1] - sc.grid.min[1]) / (h * h * h);
-            jobs.push((b.key(), format!("{} {}", sw.id, b.label()), sc, cost));
-        }
-    }
-    jobs.sort_by(|x, y| y.3.total_cmp(&x.3));
-    let total = jobs.len();
-    let workers = a.jobs.resolve().clamp(1, total.max(1));
-    println!("cohesive: {total} runs, {workers} at a time");
-    let crack = u32::try_from(scene0.cracks.len()).unwrap_or(u32::MAX);
-    let next = AtomicUsize::new(0);
-    let done = AtomicUsize::new(0);
-    let results: Mutex<HashMap<String, Measured>> = Mutex::new(HashMap::new());
-    std::thread::scope(|s| {
-        for _ in 0..workers {
-            s.spawn(|| {
-                while let Some((key, label, sc, _)) = jobs.get(next.fetch_add(1, Ordering::Relaxed))
-                {
-                    let m = run_one(sc, a.threads, (crack, 1));
-                    let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-                    println!(
-                        "[cohesive {n}/{total}] {label}: {:?}, {:.1} s, front {:.1} mm further",
-                        m.status,
-                        m.wall,
-                        1e3 * m.extension()
-                    );
-                    if let Ok(mut r) = results.lock() {
-                        r.insert(key.clone(), m);
-                    }
-                }
+            let h = scene.grid.cell_size;
+            let cost = (scene.grid.max[0] - scene.grid.min[0])
+                * (scene.grid.max[1] - scene.grid.min[1])
+                / (h * h * h);
+            jobs.push(Job {
+                key: b.key(),
+                label: format!("{} {}", sw.id, b.label()),
+                scene,
+                cost,
             });
         }
-    });
-    let results = results
-        .into_inner()
-        .map_err(|_| anyhow::anyhow!("a cohesive run panicked"))?;
+    }
+    let total = jobs.len();
+    // The interface's row: its index follows the scene's cracks, tip 1.
+    let crack = u32::try_from(scene0.cracks.len()).unwrap_or(u32::MAX);
+    let (results, workers) = run_jobs(a, jobs, (crack, 1), "cohesive ")?;
     let page = Page {
         setup,
         sweeps: &sweeps,

@@ -131,6 +131,53 @@ struct Job {
     cost: f64,
 }
 
+/// Run `jobs` (the longest first, so that the last ones to finish are short), `--jobs` at a
+/// time with `--threads` each, measuring the rows of `target` (crack index, tip); progress
+/// lines start with `tag`. Returns what each run measured by its key, and the runs at a
+/// time.
+fn run_jobs(
+    a: &StudyArgs,
+    mut jobs: Vec<Job>,
+    target: (u32, u32),
+    tag: &str,
+) -> anyhow::Result<(HashMap<String, Measured>, usize)> {
+    jobs.sort_by(|x, y| y.cost.total_cmp(&x.cost));
+    let total = jobs.len();
+    let workers = a.jobs.resolve().clamp(1, total.max(1));
+    println!(
+        "{tag}{total} runs, {workers} at a time, {} solver thread(s) each",
+        a.threads
+    );
+    let next = AtomicUsize::new(0);
+    let done = AtomicUsize::new(0);
+    let results: Mutex<HashMap<String, Measured>> = Mutex::new(HashMap::new());
+    std::thread::scope(|s| {
+        for _ in 0..workers {
+            s.spawn(|| {
+                while let Some(job) = jobs.get(next.fetch_add(1, Ordering::Relaxed)) {
+                    let m = run_one(&job.scene, a.threads, target);
+                    let n = done.fetch_add(1, Ordering::Relaxed) + 1;
+                    println!(
+                        "[{tag}{n}/{total}] {}: {:?}, {:.1} s, {:.2e} particle-steps/s, tip {:.1} mm further",
+                        job.label,
+                        m.status,
+                        m.wall,
+                        m.psps,
+                        1e3 * m.extension()
+                    );
+                    if let Ok(mut r) = results.lock() {
+                        r.insert(job.key.clone(), m);
+                    }
+                }
+            });
+        }
+    });
+    let results = results
+        .into_inner()
+        .map_err(|_| anyhow::anyhow!("a run panicked"))?;
+    Ok((results, workers))
+}
+
 fn rosakis(a: &StudyArgs) -> anyhow::Result<()> {
     anyhow::ensure!(
         a.min_cell.is_finite() && a.min_cell > 0.0,
@@ -192,41 +239,8 @@ fn tip_law_study(a: &StudyArgs, figs: &Path) -> anyhow::Result<()> {
             });
         }
     }
-    // The longest runs first, so that the last ones to finish are short.
-    jobs.sort_by(|x, y| y.cost.total_cmp(&x.cost));
     let total = jobs.len();
-    let workers = a.jobs.resolve().clamp(1, total.max(1));
-    println!(
-        "{total} runs, {workers} at a time, {} solver thread(s) each",
-        a.threads
-    );
-    let next = AtomicUsize::new(0);
-    let done = AtomicUsize::new(0);
-    let results: Mutex<HashMap<String, Measured>> = Mutex::new(HashMap::new());
-    std::thread::scope(|s| {
-        for _ in 0..workers {
-            s.spawn(|| {
-                while let Some(job) = jobs.get(next.fetch_add(1, Ordering::Relaxed)) {
-                    let m = run_one(&job.scene, a.threads, (0, 1));
-                    let n = done.fetch_add(1, Ordering::Relaxed) + 1;
-                    println!(
-                        "[{n}/{total}] {}: {:?}, {:.1} s, {:.2e} particle-steps/s, tip {:.1} mm further",
-                        job.label,
-                        m.status,
-                        m.wall,
-                        m.psps,
-                        1e3 * m.extension()
-                    );
-                    if let Ok(mut r) = results.lock() {
-                        r.insert(job.key.clone(), m);
-                    }
-                }
-            });
-        }
-    });
-    let results = results
-        .into_inner()
-        .map_err(|_| anyhow::anyhow!("a run panicked"))?;
+    let (results, workers) = run_jobs(a, jobs, (0, 1), "")?;
     let base = &bases[&a.scene];
     let scene0 = scene_from_value(base.clone()).map_err(|e| anyhow::anyhow!("{e}"))?;
     let speeds = scene0

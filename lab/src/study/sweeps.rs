@@ -15,7 +15,7 @@ use super::{StudyArgs, read_json};
 
 /// Impedance-matching factor of a steel projectile on Homalite: the struck edge moves at
 /// 0.93·v (`reference-solutions.md`).
-const EDGE_FACTOR: f64 = 0.93;
+pub(super) const EDGE_FACTOR: f64 = 0.93;
 /// JSON paths of the swept parameters in the Rosakis scenes.
 pub(super) const P_VELOCITY: &str = "boundary_conditions.0.velocity.x";
 pub(super) const P_TOUGHNESS: &str = "cracks.0.propagation.toughness";
