@@ -60,9 +60,13 @@ impl Bond {
         }
     }
 
-    /// Past the peak traction (the process zone).
+    /// In the process zone: past the peak traction and softened by more than 1 % of the
+    /// strength (or failed). The margin keeps a rigid linear bond (peak at zero separation)
+    /// whose surfaces drift by round-off under it out of the zone front (`Fronts::zone`).
     pub fn softening(&self) -> bool {
-        self.failed || self.lambda_max > self.law.peak()
+        self.failed
+            || (self.lambda_max > self.law.peak()
+                && self.law.shape(self.lambda_max) < 0.99 * self.law.shape(self.law.peak()))
     }
 
     /// T at λ for a largest separation `l_max` (no update).
@@ -294,5 +298,24 @@ mod tests {
             let w = work(&mut b, &path);
             assert!((w / 100.0 - 1.0).abs() < 3e-3, "{law:?}: {w} vs 100");
         }
+    }
+
+    /// The zone front's test: a drift far below δ_c under a rigid linear bond is not
+    /// softening; 2 % of δ_c is (the traction has dropped by 2 %); the exponential law is in
+    /// the zone only past its peak.
+    #[test]
+    fn softening_means_the_traction_has_dropped() {
+        let mut b = bond(CohesiveLaw::Linear);
+        let dc = b.critical[0];
+        let _ = b.traction(1e-6 * dc, 0.0);
+        assert!(!b.softening());
+        let _ = b.traction(0.02 * dc, 0.0);
+        assert!(b.softening());
+        let mut e = bond(CohesiveLaw::Exponential);
+        let dc = e.critical[0];
+        let _ = e.traction(0.9 * dc, 0.0);
+        assert!(!e.softening());
+        let _ = e.traction(2.0 * dc, 0.0);
+        assert!(e.softening());
     }
 }
