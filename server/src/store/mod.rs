@@ -415,8 +415,19 @@ impl Store {
             Db::Postgres(p) => p.close().await,
         }
         if let Some(lock) = &self.lock
-            && let Some(conn) = lock.lock().await.take()
+            && let Some(mut conn) = lock.lock().await.take()
         {
+            // Unlock explicitly: closing the connection only asks the backend to exit, and
+            // PostgreSQL drops a session lock when that process ends, some time after the
+            // client returns (a server restarted at once was refused as "in use"). The
+            // unlock's reply comes after the lock is released.
+            if let Err(e) = sqlx::query_scalar::<_, bool>("SELECT pg_advisory_unlock($1)")
+                .bind(PG_LOCK_KEY)
+                .fetch_one(&mut conn)
+                .await
+            {
+                tracing::warn!("releasing the PostgreSQL database lock failed: {e}");
+            }
             let _ = conn.close().await;
         }
     }
