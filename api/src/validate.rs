@@ -11,9 +11,14 @@ use serde::{Deserialize, Serialize};
 
 use crate::lattice;
 use crate::scene::{
-    Analysis, ContactLaw, Damping, FieldKind, GrowthDirection, JIntegral, Propagation, Region,
-    Scene, Toughness, Vec2,
+    Analysis, CohesiveLaw, ContactLaw, Damping, FieldKind, GrowthDirection, JIntegral, Propagation,
+    Region, Scene, Toughness, Vec2,
 };
+
+/// The largest `time.cfl` a scene with an exponential or cubic interface may use: their stiff
+/// initial branch makes larger steps unstable (measured on a cohesive double-cantilever beam,
+/// `docs/scene-extensions.md`).
+pub const MAX_CFL_ELASTIC_LAW: f64 = 0.15;
 
 /// One validation problem.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
@@ -560,6 +565,28 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
         }
         if let ContactLaw::Coulomb { friction } = it.contact {
             c.non_negative(&format!("{p}.contact.friction"), friction);
+        }
+        // The elastic laws' stiff initial branch (slope e²σ_c²/G exponential, 3.8σ_c²/G cubic)
+        // bounds the explicit step (docs/scene-extensions.md, "Stability"): measured on a
+        // double-cantilever beam at 1 and 0.5 mm cells, cfl 0.15 is stable, 0.2 is not.
+        if matches!(
+            it.cohesive.law,
+            CohesiveLaw::Exponential | CohesiveLaw::Cubic
+        ) && scene.time.cfl > MAX_CFL_ELASTIC_LAW
+        {
+            c.err(
+                "time.cfl",
+                scene.time.cfl,
+                format!(
+                    "is above {MAX_CFL_ELASTIC_LAW}, the largest stable with the {} law of \
+                     {p}.cohesive.law (its stiff initial branch); lower time.cfl or use the \
+                     linear law, which has no such limit",
+                    match it.cohesive.law {
+                        CohesiveLaw::Exponential => "exponential",
+                        _ => "cubic",
+                    }
+                ),
+            );
         }
     }
 

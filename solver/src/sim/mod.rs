@@ -169,6 +169,7 @@ impl Simulation {
         self.work_abs += acc.w.abs();
         self.needs_sort |= acc.resort;
         self.apply_bc_momentum(t1, true);
+        self.bond_hold();
         self.contact(Stage::Reextrapolated);
         self.nodal(Stage::Reextrapolated);
 
@@ -275,6 +276,14 @@ impl Simulation {
                 self.dt,
             );
             self.dissipated += w;
+        }
+    }
+
+    /// Rigid bonded interface points hold their re-extrapolated momenta together
+    /// (`crack/zone.rs`, `Cracks::bond_hold`).
+    fn bond_hold(&mut self) {
+        if let Some(cr) = self.cracks.as_mut() {
+            cr.bond_hold(&self.geom, &mut self.nodes, &mut self.f1, &self.slot_of);
         }
     }
 
