@@ -8,9 +8,12 @@
 //!
 //! The tractions act at the force stage through the same node pairs and stick-capped ± impulses
 //! as the process zone (`zone.rs`): an impulse never goes past the one that makes the two
-//! fields move together, so a stiff (or rigid) initial branch cannot make the explicit step
-//! unstable, whatever the fields' masses and the scene's cfl. The work is booked as the applied
-//! force times the separation that opened under it.
+//! fields move together, so the rigid linear law needs no time-step limit (a rigid bond, not
+//! yet loaded to its strength, also ties the re-extrapolated momenta: `Cracks::bond_hold`).
+//! The stiff elastic branches of the exponential and cubic laws are not made stable by that
+//! cap on a double-cantilever beam above cfl 0.15, which validation enforces
+//! (`MAX_CFL_ELASTIC_LAW`). The work is booked as the applied force times the separation that
+//! opened under it.
 
 use fracture_api::results::CrackTipRow;
 use fracture_api::scene::{Cohesive, CohesiveLaw};
