@@ -104,6 +104,11 @@ export function runView(main, { id }) {
       posPlot.push(`${key}x`, t, r.x, { name: `x, ${n}`, color });
       posPlot.push(`${key}y`, t, r.y, { name: `y, ${n}`, color, dash: DASHES[1] });
       posPlot.push(`${key}l`, t, r.length, { name: `length, ${n}`, color, dash: DASHES[2] });
+      // An interface's process-zone front (run-output.md: `zone_x`, empty before any point
+      // has softened), beside its failure front `x`.
+      if (r.zone_x !== null && r.zone_x !== undefined && r.zone_x !== '' && Number.isFinite(Number(r.zone_x))) {
+        posPlot.push(`${key}z`, t, Number(r.zone_x), { name: `process-zone front x, ${n}`, color, dash: DASHES[3] });
+      }
       jPlot.push(`${key}1`, t, r.j1, { name: `J1, ${n}`, color });
       jPlot.push(`${key}2`, t, r.j2, { name: `J2, ${n}`, color, dash: DASHES[1] });
       kPlot.push(`${key}1`, t, r.k1, { name: `K_I, ${n}`, color });
@@ -120,6 +125,12 @@ export function runView(main, { id }) {
       if (!Number.isFinite(t) || t <= lastEnergy) continue;
       lastEnergy = t;
       for (const [k] of energyCols) ePlot.push(k, t, r[k]);
+      // Fracture energy (run-output.md's `fracture` column, part of `dissipated`): shown
+      // once a run has any.
+      const fr = Number(r.fracture);
+      if (Number.isFinite(fr) && (fr !== 0 || ePlot.series.some((x) => x.key === 'fracture'))) {
+        ePlot.push('fracture', t, fr, { name: 'fracture (in dissipated)', color: PALETTE[energyCols.length], dash: DASHES[2] });
+      }
     }
   }
 
