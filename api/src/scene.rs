@@ -608,6 +608,13 @@ pub struct BoundaryCondition {
     /// Condition is active until this time (s).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub end: Option<f64>,
+    /// The region travels with the prescribed velocity (the displacement of the prescribed
+    /// components so far): a rigid impactor's face, whose nodes at each step are those it
+    /// covers then. False (the default): the region is fixed in space, and material that
+    /// moves out of it is no longer driven (after a travel of about a cell, so how long a
+    /// fixed region drives depends on the cell size). An extension (`docs/scene-extensions.md`).
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub moving: bool,
 }
 
 /// Prescribed velocity components (m/s).
