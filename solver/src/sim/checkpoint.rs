@@ -41,7 +41,7 @@ use crate::particles::Particles;
 pub const CHECKPOINT_MAGIC: [u8; 8] = *b"MPMFSIM\0";
 
 /// Version of the checkpoint layout; bumped whenever the persisted state changes shape.
-pub const CHECKPOINT_FORMAT: u32 = 1;
+pub const CHECKPOINT_FORMAT: u32 = 2;
 
 /// Why a checkpoint was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
