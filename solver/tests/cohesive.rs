@@ -91,6 +91,21 @@ struct Outcome {
     off_line: f64,
 }
 
+/// The traction work of the interface's (crack 1's) failed points (J) and their area (m²).
+fn failed_work_and_area(sim: &fracture_solver::Simulation, s: &Scene) -> (f64, f64) {
+    let c = &sim.cracks().unwrap().cracks[1];
+    let (mut work, mut area) = (0.0, 0.0);
+    for p in &c.pts {
+        if let Some(b) = p.bond
+            && b.failed
+        {
+            work += b.work;
+            area += b.share * s.thickness;
+        }
+    }
+    (work, area)
+}
+
 fn run(s: &Scene) -> Outcome {
     let mut sim = sim(s, 0);
     let cy = s.interfaces[0].points[0][1];
@@ -111,16 +126,7 @@ fn run(s: &Scene) -> Outcome {
         }
     }
     let e = sim.energy();
-    let c = &sim.cracks().unwrap().cracks[1];
-    let (mut work, mut area) = (0.0, 0.0);
-    for p in &c.pts {
-        if let Some(b) = p.bond
-            && b.failed
-        {
-            work += b.work;
-            area += b.share * s.thickness;
-        }
-    }
+    let (work, area) = failed_work_and_area(&sim, s);
     Outcome {
         per_area: work / area,
         area,
@@ -295,16 +301,7 @@ fn run_dcb(s: &Scene) -> DcbOutcome {
         }
     }
     let e = sim.energy();
-    let c = &sim.cracks().unwrap().cracks[1];
-    let (mut work, mut area) = (0.0, 0.0);
-    for p in &c.pts {
-        if let Some(b) = p.bond
-            && b.failed
-        {
-            work += b.work;
-            area += b.share * s.thickness;
-        }
-    }
+    let (work, area) = failed_work_and_area(&sim, s);
     DcbOutcome {
         per_area: work / area,
         area,

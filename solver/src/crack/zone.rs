@@ -342,45 +342,24 @@ impl Cracks {
         dt: f64,
         impulse: impl Fn(f64, [f64; 2]) -> [f64; 2],
     ) -> Option<[f64; 2]> {
-        let eps = 1e-3 * self.h;
-        let (cx, cy, fx, fy) = geom.cell_with_fractions(x)?;
-        let from_above = [x[0] - eps * nrm[0], x[1] - eps * nrm[1]];
-        let from_below = [x[0] + eps * nrm[0], x[1] + eps * nrm[1]];
-        // At most the 4 nodes of the cell: no allocation per point and step.
-        let mut pairs: [Option<(f64, Field, Field)>; 4] = [None; 4];
-        let mut count = 0;
-        let mut wsum = 0.0;
-        for (a, wa) in [(0, 1.0 - fx), (1, fx)] {
-            for (b, wb) in [(0, 1.0 - fy), (1, fy)] {
-                let w = wa * wb;
-                if w <= 0.0 {
-                    continue;
-                }
-                let (ix, iy) = (cx + a, cy + b);
-                let fa = self.side_field(geom, from_above, ix, iy, slot_of);
-                let fb = self.side_field(geom, from_below, ix, iy, slot_of);
-                if let (Some(fa), Some(fb)) = (fa, fb)
-                    && fa != fb
-                {
-                    pairs[count] = Some((w, fa, fb));
-                    count += 1;
-                    wsum += w;
-                }
-            }
-        }
+        let pairs = self.cell_pairs(geom, slot_of, x, nrm)?;
+        let wsum: f64 = pairs
+            .iter()
+            .flatten()
+            .map(|p| p.0)
+            .filter(|&w| w > 0.0)
+            .sum();
         if wsum <= 0.0 {
             return None;
         }
         let mut applied = [0.0; 2];
         for (w, fa, fb) in pairs.into_iter().flatten() {
-            let (na, nb): (&mut Node, &mut Node) = match (fa, fb) {
-                (Field::Zero(i), Field::One(s)) => (&mut nodes[i], &mut f1[s]),
-                (Field::One(s), Field::Zero(i)) => (&mut f1[s], &mut nodes[i]),
-                _ => continue,
-            };
-            if na.m <= 0.0 || nb.m <= 0.0 {
+            if w <= 0.0 {
                 continue;
             }
+            let Some((na, nb)) = pair_mut(nodes, f1, fa, fb) else {
+                continue;
+            };
             // Force-stage momenta and the stick change of the above field.
             let pa_ = [na.p[0] + dt * na.f[0], na.p[1] + dt * na.f[1]];
             let pb_ = [nb.p[0] + dt * nb.f[0], nb.p[1] + dt * nb.f[1]];
@@ -482,6 +461,56 @@ impl Cracks {
     }
 }
 
+/// The two fields of a node pair, above first, when both hold mass.
+fn pair_mut<'a>(
+    nodes: &'a mut [Node],
+    f1: &'a mut [Node],
+    fa: Field,
+    fb: Field,
+) -> Option<(&'a mut Node, &'a mut Node)> {
+    let (na, nb) = match (fa, fb) {
+        (Field::Zero(i), Field::One(s)) => (&mut nodes[i], &mut f1[s]),
+        (Field::One(s), Field::Zero(i)) => (&mut f1[s], &mut nodes[i]),
+        _ => return None,
+    };
+    (na.m > 0.0 && nb.m > 0.0).then_some((na, nb))
+}
+
+impl Cracks {
+    /// For each node of the cell of `x` (in the order (0,0), (0,1), (1,0), (1,1)): its
+    /// bilinear weight of `x` (possibly 0) and the above and below sides' fields, where both
+    /// are present and differ (a two-field node across the line of normal `nrm`); None
+    /// outside the grid. At most 4 entries: no allocation per point and step.
+    fn cell_pairs(
+        &self,
+        geom: &GridGeom,
+        slot_of: &[u32],
+        x: [f64; 2],
+        nrm: [f64; 2],
+    ) -> Option<[Option<(f64, Field, Field)>; 4]> {
+        let eps = 1e-3 * self.h;
+        let (cx, cy, fx, fy) = geom.cell_with_fractions(x)?;
+        let from_above = [x[0] - eps * nrm[0], x[1] - eps * nrm[1]];
+        let from_below = [x[0] + eps * nrm[0], x[1] + eps * nrm[1]];
+        let mut pairs: [Option<(f64, Field, Field)>; 4] = [None; 4];
+        let mut k = 0;
+        for (a, wa) in [(0, 1.0 - fx), (1, fx)] {
+            for (b, wb) in [(0, 1.0 - fy), (1, fy)] {
+                let (ix, iy) = (cx + a, cy + b);
+                let fa = self.side_field(geom, from_above, ix, iy, slot_of);
+                let fb = self.side_field(geom, from_below, ix, iy, slot_of);
+                if let (Some(fa), Some(fb)) = (fa, fb)
+                    && fa != fb
+                {
+                    pairs[k] = Some((wa * wb, fa, fb));
+                }
+                k += 1;
+            }
+        }
+        Some(pairs)
+    }
+}
+
 impl Cracks {
     /// Hold the re-extrapolated momenta of the rigid bonded points (the linear law not yet
     /// loaded to its strength, `Bond::engaged`): on each of their node pairs, the change
@@ -542,26 +571,14 @@ impl Cracks {
         nrm: [f64; 2],
         change: impl Fn([f64; 2]) -> [f64; 2],
     ) {
-        let eps = 1e-3 * self.h;
-        let Some((cx, cy, _, _)) = geom.cell_with_fractions(x) else {
+        let Some(pairs) = self.cell_pairs(geom, slot_of, x, nrm) else {
             return;
         };
-        let from_above = [x[0] - eps * nrm[0], x[1] - eps * nrm[1]];
-        let from_below = [x[0] + eps * nrm[0], x[1] + eps * nrm[1]];
-        for (ix, iy) in [(cx, cy), (cx + 1, cy), (cx, cy + 1), (cx + 1, cy + 1)] {
-            let fa = self.side_field(geom, from_above, ix, iy, slot_of);
-            let fb = self.side_field(geom, from_below, ix, iy, slot_of);
-            let (Some(fa), Some(fb)) = (fa, fb) else {
+        // Every node of the cell, a zero bilinear weight included: a constraint.
+        for (_, fa, fb) in pairs.into_iter().flatten() {
+            let Some((na, nb)) = pair_mut(nodes, f1, fa, fb) else {
                 continue;
             };
-            let (na, nb): (&mut Node, &mut Node) = match (fa, fb) {
-                (Field::Zero(i), Field::One(s)) => (&mut nodes[i], &mut f1[s]),
-                (Field::One(s), Field::Zero(i)) => (&mut f1[s], &mut nodes[i]),
-                _ => continue,
-            };
-            if na.m <= 0.0 || nb.m <= 0.0 {
-                continue;
-            }
             let big_m = na.m + nb.m;
             // The re-extrapolated momenta are `q`.
             let stick = [
