@@ -116,7 +116,7 @@ pub(super) struct CSweep {
 /// sizes `cells` (the scene's, half and double of it, those at least `min_cell`).
 pub(super) fn cohesive_sweeps(scene_h: f64, min_cell: f64) -> Vec<CSweep> {
     let b = Bond::base();
-    let cells: Vec<f64> = [2.0 * scene_h, scene_h, 0.5 * scene_h]
+    let cells: Vec<f64> = [2.0 * scene_h, scene_h, 0.5 * scene_h, 0.25 * scene_h]
         .into_iter()
         .filter(|&h| h >= min_cell * (1.0 - 1e-9))
         .collect();

@@ -93,9 +93,10 @@ pub struct StudyArgs {
     /// The base scene of the cohesive part.
     #[arg(long, default_value = "scenes/rosakis-shear-cohesive.json")]
     pub cohesive_scene: PathBuf,
-    /// The smallest cell size (m) of the cohesive cell-size check (the scene's cells, double
-    /// and half of them; 2.5e-4 runs all three for the 0.5 mm scene, the 0.25 mm run is
-    /// most of the cohesive part's time).
+    /// The smallest cell size (m) of the cohesive cell-size check (the scene's cells, double,
+    /// half and a quarter of them; 2.5e-4 runs the first three for the 0.5 mm scene, the
+    /// 0.25 mm run being most of the cohesive part's time; 1.25e-4 adds the 0.125 mm run,
+    /// 8 million particles, about 15 min on 2 threads, `docs/scene-extensions.md`).
     #[arg(long, default_value_t = 2.5e-4)]
     pub cohesive_min_cell: f64,
 }
