@@ -5,6 +5,10 @@
 
 #![allow(clippy::unwrap_used)]
 
+#[path = "support/app.rs"]
+mod app;
+use app::call;
+
 use axum::body::Body;
 use axum::http::{Request, StatusCode};
 use fracture_server::config::Config;
@@ -25,26 +29,7 @@ async fn state(dir: &std::path::Path) -> AppState {
 }
 
 fn scene(end: f64) -> Value {
-    json!({
-        "name": "cache",
-        "grid": { "cell_size": 0.001, "min": [0.0, 0.0], "max": [0.022, 0.012] },
-        "materials": { "m": { "model": "linear_elastic", "density": 1230.0,
-                              "youngs_modulus": 3.96e9, "poissons_ratio": 0.35 } },
-        "bodies": [ { "material": "m",
-                      "region": { "rectangle": { "min": [0.001, 0.001], "max": [0.021, 0.011] } },
-                      "particles_per_cell": 2 } ],
-        "time": { "end": end }
-    })
-}
-
-async fn call(st: &AppState, req: Request<Body>) -> (StatusCode, Value) {
-    let resp = app(st.clone()).oneshot(req).await.unwrap();
-    let status = resp.status();
-    let bytes = resp.into_body().collect().await.unwrap().to_bytes();
-    (
-        status,
-        serde_json::from_slice(&bytes).unwrap_or(Value::Null),
-    )
+    app::scene("cache", end)
 }
 
 fn post(uri: &str, body: &Value, token: Option<&str>) -> Request<Body> {

@@ -6,15 +6,16 @@
 
 #![allow(clippy::unwrap_used)]
 
+#[path = "support/app.rs"]
+mod app;
+
 use axum::body::Body;
 use axum::http::{Request, StatusCode};
+use fracture_server::AppState;
 use fracture_server::config::Config;
 use fracture_server::files::JobFiles;
 use fracture_server::store::Store;
-use fracture_server::{AppState, app};
-use http_body_util::BodyExt;
 use serde_json::{Value, json};
-use tower::ServiceExt;
 
 async fn state(dir: &std::path::Path) -> AppState {
     let store = Store::open(&dir.join("t.db")).await.unwrap();
@@ -26,23 +27,12 @@ async fn state(dir: &std::path::Path) -> AppState {
 }
 
 fn scene() -> Value {
-    json!({
-        "name": "unit",
-        "grid": { "cell_size": 0.001, "min": [0.0, 0.0], "max": [0.022, 0.012] },
-        "materials": { "m": { "model": "linear_elastic", "density": 1230.0,
-                              "youngs_modulus": 3.96e9, "poissons_ratio": 0.35 } },
-        "bodies": [ { "material": "m",
-                      "region": { "rectangle": { "min": [0.001, 0.001], "max": [0.021, 0.011] } },
-                      "particles_per_cell": 2 } ],
-        "time": { "end": 1.0e-5 }
-    })
+    app::scene("unit", 1.0e-5)
 }
 
 async fn call(st: &AppState, req: Request<Body>) -> (StatusCode, Vec<u8>) {
-    let resp = app(st.clone()).oneshot(req).await.unwrap();
-    let status = resp.status();
-    let bytes = resp.into_body().collect().await.unwrap().to_bytes();
-    (status, bytes.to_vec())
+    let (s, _, b) = app::send_raw(st, req).await;
+    (s, b)
 }
 
 async fn json_call(st: &AppState, req: Request<Body>) -> (StatusCode, Value) {

@@ -3,6 +3,10 @@
 
 #![allow(clippy::unwrap_used)]
 
+#[path = "support/app.rs"]
+mod app;
+use app::call;
+
 use axum::body::Body;
 use axum::http::{Request, StatusCode};
 use fracture_api::jobs::JobStatus;
@@ -10,7 +14,6 @@ use fracture_server::config::{Config, Limits};
 use fracture_server::files::JobFiles;
 use fracture_server::store::Store;
 use fracture_server::{AppState, app};
-use http_body_util::BodyExt;
 use serde_json::{Value, json};
 use tower::ServiceExt;
 
@@ -30,26 +33,7 @@ async fn state(dir: &std::path::Path, token: Option<&str>) -> AppState {
 }
 
 fn scene() -> Value {
-    json!({
-        "name": "unit",
-        "grid": { "cell_size": 0.001, "min": [0.0, 0.0], "max": [0.022, 0.012] },
-        "materials": { "m": { "model": "linear_elastic", "density": 1230.0,
-                              "youngs_modulus": 3.96e9, "poissons_ratio": 0.35 } },
-        "bodies": [ { "material": "m",
-                      "region": { "rectangle": { "min": [0.001, 0.001], "max": [0.021, 0.011] } },
-                      "particles_per_cell": 2 } ],
-        "time": { "end": 1.0e-5 }
-    })
-}
-
-async fn call(st: &AppState, req: Request<Body>) -> (StatusCode, Value) {
-    let resp = app(st.clone()).oneshot(req).await.unwrap();
-    let status = resp.status();
-    let bytes = resp.into_body().collect().await.unwrap().to_bytes();
-    (
-        status,
-        serde_json::from_slice(&bytes).unwrap_or(Value::Null),
-    )
+    app::scene("unit", 1.0e-5)
 }
 
 fn post(uri: &str, body: impl Into<Body>, token: Option<&str>) -> Request<Body> {

@@ -7,6 +7,9 @@
 
 #![allow(clippy::unwrap_used)]
 
+#[path = "support/app.rs"]
+mod app;
+
 use std::time::{Duration, Instant};
 
 use axum::body::Body;
@@ -16,7 +19,6 @@ use fracture_server::config::{Config, Limits};
 use fracture_server::files::JobFiles;
 use fracture_server::store::Store;
 use fracture_server::{AppState, app};
-use http_body_util::BodyExt;
 use serde_json::{Value, json};
 use tower::ServiceExt;
 
@@ -35,34 +37,10 @@ async fn state(dir: &std::path::Path) -> AppState {
 }
 
 fn scene() -> Value {
-    json!({
-        "name": "unit",
-        "grid": { "cell_size": 0.001, "min": [0.0, 0.0], "max": [0.022, 0.012] },
-        "materials": { "m": { "model": "linear_elastic", "density": 1230.0,
-                              "youngs_modulus": 3.96e9, "poissons_ratio": 0.35 } },
-        "bodies": [ { "material": "m",
-                      "region": { "rectangle": { "min": [0.001, 0.001], "max": [0.021, 0.011] } },
-                      "particles_per_cell": 2 } ],
-        "time": { "end": 1.0e-5 }
-    })
+    app::scene("unit", 1.0e-5)
 }
 
-async fn send(st: &AppState, req: Request<Body>) -> (StatusCode, axum::http::HeaderMap, Value) {
-    let resp = app(st.clone()).oneshot(req).await.unwrap();
-    let status = resp.status();
-    let headers = resp.headers().clone();
-    let bytes = resp.into_body().collect().await.unwrap().to_bytes();
-    (
-        status,
-        headers,
-        serde_json::from_slice(&bytes).unwrap_or(Value::Null),
-    )
-}
-
-async fn call(st: &AppState, req: Request<Body>) -> (StatusCode, Value) {
-    let (s, _, v) = send(st, req).await;
-    (s, v)
-}
+use app::call;
 
 fn post_json(uri: &str, body: impl Into<Body>) -> Request<Body> {
     Request::post(uri)
@@ -540,13 +518,13 @@ async fn security_headers_are_on_every_response_and_the_dashboard_has_a_csp() {
         "/app.js",
         "/api/v1/openapi.json",
     ] {
-        let (_, h, _) = send(&st, get(uri)).await;
+        let (_, h, _) = app::send(&st, get(uri)).await;
         assert_eq!(h["x-content-type-options"], "nosniff", "{uri}");
         assert_eq!(h["x-frame-options"], "DENY", "{uri}");
         let csp = h["content-security-policy"].to_str().unwrap();
         assert!(csp.contains("frame-ancestors 'none'"), "{uri}: {csp}");
     }
-    let (_, h, _) = send(&st, get("/")).await;
+    let (_, h, _) = app::send(&st, get("/")).await;
     let csp = h["content-security-policy"].to_str().unwrap();
     assert!(
         csp.contains("script-src 'self'") && !csp.contains("script-src 'self' 'unsafe"),

@@ -4,15 +4,16 @@
 
 #![allow(clippy::unwrap_used)]
 
+#[path = "support/app.rs"]
+mod app;
+
 use axum::body::Body;
 use axum::http::{Request, StatusCode};
+use fracture_server::AppState;
 use fracture_server::config::{Config, Limits};
 use fracture_server::files::JobFiles;
 use fracture_server::store::Store;
-use fracture_server::{AppState, app};
-use http_body_util::BodyExt;
 use serde_json::{Value, json};
-use tower::ServiceExt;
 
 async fn state(dir: &std::path::Path, token: Option<&str>) -> AppState {
     let store = Store::open(&dir.join("t.db")).await.unwrap();
@@ -30,30 +31,10 @@ async fn state(dir: &std::path::Path, token: Option<&str>) -> AppState {
 }
 
 fn scene() -> Value {
-    json!({
-        "name": "unit",
-        "grid": { "cell_size": 0.001, "min": [0.0, 0.0], "max": [0.022, 0.012] },
-        "materials": { "m": { "model": "linear_elastic", "density": 1230.0,
-                              "youngs_modulus": 3.96e9, "poissons_ratio": 0.35 } },
-        "bodies": [ { "material": "m",
-                      "region": { "rectangle": { "min": [0.001, 0.001], "max": [0.021, 0.011] } },
-                      "particles_per_cell": 2 } ],
-        "boundary_conditions": [ { "region": { "rectangle": { "min": [0.0, 0.0], "max": [0.001, 0.012] } },
-                                   "velocity": { "x": 1.0 } } ],
-        "time": { "end": 1.0e-5 }
-    })
-}
-
-async fn call(st: &AppState, req: Request<Body>) -> (StatusCode, axum::http::HeaderMap, Value) {
-    let resp = app(st.clone()).oneshot(req).await.unwrap();
-    let status = resp.status();
-    let headers = resp.headers().clone();
-    let bytes = resp.into_body().collect().await.unwrap().to_bytes();
-    (
-        status,
-        headers,
-        serde_json::from_slice(&bytes).unwrap_or(Value::Null),
-    )
+    let mut s = app::scene("unit", 1.0e-5);
+    s["boundary_conditions"] = json!([ { "region": { "rectangle": { "min": [0.0, 0.0], "max": [0.001, 0.012] } },
+                                         "velocity": { "x": 1.0 } } ]);
+    s
 }
 
 fn post(uri: &str, body: &Value, token: Option<&str>) -> Request<Body> {
@@ -83,7 +64,7 @@ async fn a_sweep_creates_one_labelled_job_per_combination() {
         .header("content-type", "application/json")
         .body(Body::from(body))
         .unwrap();
-    let (s, h, v) = call(&st, req).await;
+    let (s, h, v) = app::send(&st, req).await;
     assert_eq!(s, StatusCode::CREATED, "{v}");
     let id = v["id"].as_str().unwrap().to_string();
     assert_eq!(
@@ -107,7 +88,7 @@ async fn a_sweep_creates_one_labelled_job_per_combination() {
     // Each job is a real job with the values set in its scene, the sweep's labels and its
     // link to the sweep.
     let jid = jobs[4]["id"].as_str().unwrap();
-    let (s, _, j) = call(&st, get(&format!("/api/v1/jobs/{jid}"))).await;
+    let (s, _, j) = app::send(&st, get(&format!("/api/v1/jobs/{jid}"))).await;
     assert_eq!(s, StatusCode::OK);
     assert_eq!(j["sweep_id"], id.as_str());
     assert_eq!(j["priority"], 3);
@@ -118,9 +99,9 @@ async fn a_sweep_creates_one_labelled_job_per_combination() {
     assert_eq!(j["labels"]["velocity.x"], "2.5");
     assert_eq!(j["labels"]["study"], "unit");
     // The jobs list carries the link too; a lone job has none.
-    let (_, _, lone) = call(&st, post("/api/v1/jobs", &scene(), None)).await;
+    let (_, _, lone) = app::send(&st, post("/api/v1/jobs", &scene(), None)).await;
     assert!(lone.get("sweep_id").is_none(), "{lone}");
-    let (_, _, list) = call(&st, get("/api/v1/jobs?limit=10")).await;
+    let (_, _, list) = app::send(&st, get("/api/v1/jobs?limit=10")).await;
     let linked = list
         .as_array()
         .unwrap()
@@ -129,7 +110,7 @@ async fn a_sweep_creates_one_labelled_job_per_combination() {
         .count();
     assert_eq!(linked, 6);
     // GET returns the same sweep with its base scene.
-    let (s, _, g) = call(&st, get(&format!("/api/v1/sweeps/{id}"))).await;
+    let (s, _, g) = app::send(&st, get(&format!("/api/v1/sweeps/{id}"))).await;
     assert_eq!(s, StatusCode::OK);
     assert_eq!(g["scene"]["name"], "unit");
     assert_eq!(g["jobs"].as_array().unwrap().len(), 6);
@@ -141,12 +122,12 @@ async fn bad_paths_values_and_sizes_are_refused_before_any_job_is_queued() {
     let dir = tempfile::tempdir().unwrap();
     let st = state(dir.path(), None).await;
     let count = || async {
-        let (_, _, v) = call(&st, get("/api/v1/jobs")).await;
+        let (_, _, v) = app::send(&st, get("/api/v1/jobs")).await;
         v.as_array().map(Vec::len).unwrap_or(usize::MAX)
     };
     // A path that does not exist in the scene.
     let body = json!({"scene": scene(), "parameters": {"cracks.0.propagation.toughness": [1, 2]}});
-    let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    let (s, _, v) = app::send(&st, post("/api/v1/sweeps", &body, None)).await;
     assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
     assert_eq!(v["error"], "invalid_sweep");
     assert_eq!(
@@ -162,7 +143,7 @@ async fn bad_paths_values_and_sizes_are_refused_before_any_job_is_queued() {
     );
     // An index past the end.
     let body = json!({"scene": scene(), "parameters": {"bodies.3.particles_per_cell": [1]}});
-    let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    let (s, _, v) = app::send(&st, post("/api/v1/sweeps", &body, None)).await;
     assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
     assert!(v["message"].as_str().unwrap().contains("index 3"), "{v}");
     // One bad value among good ones: the error names the parameter, the value and the
@@ -171,7 +152,7 @@ async fn bad_paths_values_and_sizes_are_refused_before_any_job_is_queued() {
         "time.cfl": [0.5, 0.25],
         "materials.m.poissons_ratio": [0.3, 0.7],
     }});
-    let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    let (s, _, v) = app::send(&st, post("/api/v1/sweeps", &body, None)).await;
     assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
     assert_eq!(v["error"], "invalid_sweep");
     let details = v["details"].as_array().unwrap();
@@ -189,7 +170,7 @@ async fn bad_paths_values_and_sizes_are_refused_before_any_job_is_queued() {
     );
     // Values of the wrong type are caught the same way.
     let body = json!({"scene": scene(), "parameters": {"time.end": ["soon"]}});
-    let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    let (s, _, v) = app::send(&st, post("/api/v1/sweeps", &body, None)).await;
     assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
     assert!(
         v["details"][0]["message"]
@@ -201,7 +182,7 @@ async fn bad_paths_values_and_sizes_are_refused_before_any_job_is_queued() {
     // A misspelt last segment adds a key; the validator refuses it at its parent, and the
     // error still names the parameter.
     let body = json!({"scene": scene(), "parameters": {"time.cfll": [0.5]}});
-    let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    let (s, _, v) = app::send(&st, post("/api/v1/sweeps", &body, None)).await;
     assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
     let m = v["details"][0]["message"].as_str().unwrap();
     assert!(
@@ -213,7 +194,7 @@ async fn bad_paths_values_and_sizes_are_refused_before_any_job_is_queued() {
         "time.cfl": [0.1, 0.2, 0.3],
         "boundary_conditions.0.velocity.x": [1, 2, 3],
     }});
-    let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    let (s, _, v) = app::send(&st, post("/api/v1/sweeps", &body, None)).await;
     assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
     assert_eq!(v["error"], "limit_exceeded");
     assert!(
@@ -234,7 +215,7 @@ async fn bad_paths_values_and_sizes_are_refused_before_any_job_is_queued() {
         json!({"scene": scene(), "parameters": {"time.cfl": [0.5]}, "colour": 1}),
         json!({"parameters": {"time.cfl": [0.5]}}),
     ] {
-        let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+        let (s, _, v) = app::send(&st, post("/api/v1/sweeps", &body, None)).await;
         assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{body} → {v}");
         assert_eq!(v["error"], "invalid_sweep", "{v}");
     }
@@ -242,10 +223,10 @@ async fn bad_paths_values_and_sizes_are_refused_before_any_job_is_queued() {
         .header("content-type", "application/json")
         .body(Body::from("{nope"))
         .unwrap();
-    let (s, _, _) = call(&st, req).await;
+    let (s, _, _) = app::send(&st, req).await;
     assert_eq!(s, StatusCode::BAD_REQUEST);
     assert_eq!(count().await, 0);
-    let (_, _, v) = call(&st, get("/api/v1/sweeps")).await;
+    let (_, _, v) = app::send(&st, get("/api/v1/sweeps")).await;
     assert_eq!(v, json!([]));
 }
 
@@ -254,15 +235,15 @@ async fn sweeps_list_with_cursors_cancel_and_delete() {
     let dir = tempfile::tempdir().unwrap();
     let st = state(dir.path(), Some("tok")).await;
     let body = json!({"scene": scene(), "parameters": {"time.cfl": [0.25, 0.5]}, "name": "s"});
-    let (s, _, _) = call(&st, post("/api/v1/sweeps", &body, None)).await;
+    let (s, _, _) = app::send(&st, post("/api/v1/sweeps", &body, None)).await;
     assert_eq!(s, StatusCode::UNAUTHORIZED);
     let mut ids = Vec::new();
     for _ in 0..3 {
-        let (s, _, v) = call(&st, post("/api/v1/sweeps", &body, Some("tok"))).await;
+        let (s, _, v) = app::send(&st, post("/api/v1/sweeps", &body, Some("tok"))).await;
         assert_eq!(s, StatusCode::CREATED, "{v}");
         ids.push(v["id"].as_str().unwrap().to_string());
     }
-    let (s, h, v) = call(&st, get("/api/v1/sweeps?limit=2")).await;
+    let (s, h, v) = app::send(&st, get("/api/v1/sweeps?limit=2")).await;
     assert_eq!(s, StatusCode::OK);
     let page = v.as_array().unwrap();
     assert_eq!(page.len(), 2);
@@ -276,11 +257,11 @@ async fn sweeps_list_with_cursors_cancel_and_delete() {
         .to_str()
         .unwrap()
         .to_string();
-    let (_, h, v) = call(&st, get(&format!("/api/v1/sweeps?limit=2&cursor={cursor}"))).await;
+    let (_, h, v) = app::send(&st, get(&format!("/api/v1/sweeps?limit=2&cursor={cursor}"))).await;
     assert_eq!(v.as_array().unwrap().len(), 1);
     assert_eq!(v[0]["id"], ids[0].as_str());
     assert!(h.get("x-next-cursor").is_none());
-    let (s, _, _) = call(&st, get("/api/v1/sweeps?limit=0")).await;
+    let (s, _, _) = app::send(&st, get("/api/v1/sweeps?limit=0")).await;
     assert_eq!(s, StatusCode::BAD_REQUEST);
 
     // A sweep with unfinished jobs cannot be deleted; cancel it, then delete it.
@@ -290,9 +271,9 @@ async fn sweeps_list_with_cursors_cancel_and_delete() {
             .body(Body::empty())
             .unwrap()
     };
-    let (s, _, v) = call(&st, del(&ids[0])).await;
+    let (s, _, v) = app::send(&st, del(&ids[0])).await;
     assert_eq!(s, StatusCode::CONFLICT, "{v}");
-    let (s, _, v) = call(
+    let (s, _, v) = app::send(
         &st,
         post(
             &format!("/api/v1/sweeps/{}/cancel", ids[0]),
@@ -305,22 +286,22 @@ async fn sweeps_list_with_cursors_cancel_and_delete() {
     assert_eq!(v["status"], "cancelled");
     assert_eq!(v["counts"]["cancelled"], 2);
     assert_eq!(v["progress"], 1.0);
-    let (s, _, _) = call(&st, del(&ids[0])).await;
+    let (s, _, _) = app::send(&st, del(&ids[0])).await;
     assert_eq!(s, StatusCode::NO_CONTENT);
-    let (s, _, v) = call(&st, get(&format!("/api/v1/sweeps/{}", ids[0]))).await;
+    let (s, _, v) = app::send(&st, get(&format!("/api/v1/sweeps/{}", ids[0]))).await;
     assert_eq!(s, StatusCode::NOT_FOUND);
     assert_eq!(v["error"], "not_found");
-    let (_, _, jobs) = call(&st, get("/api/v1/jobs")).await;
+    let (_, _, jobs) = app::send(&st, get("/api/v1/jobs")).await;
     assert_eq!(jobs.as_array().unwrap().len(), 4);
     // Unknown ids.
-    let (s, _, _) = call(
+    let (s, _, _) = app::send(
         &st,
         post("/api/v1/sweeps/nope/cancel", &json!({}), Some("tok")),
     )
     .await;
     assert_eq!(s, StatusCode::NOT_FOUND);
     // The routes are in the OpenAPI document.
-    let (_, _, api) = call(&st, get("/api/v1/openapi.json")).await;
+    let (_, _, api) = app::send(&st, get("/api/v1/openapi.json")).await;
     for p in [
         "/api/v1/sweeps",
         "/api/v1/sweeps/{id}",
@@ -333,7 +314,7 @@ async fn sweeps_list_with_cursors_cancel_and_delete() {
 
 /// Claim the next job as worker `w`: its id, or `None` when nothing may be claimed.
 async fn claim(st: &AppState, w: &str) -> Option<(String, i64)> {
-    let (s, _, c) = call(
+    let (s, _, c) = app::send(
         st,
         post(
             "/api/v1/worker/claim",
@@ -362,11 +343,11 @@ async fn max_concurrent_limits_the_running_jobs_of_a_sweep() {
                "parameters": {"time.end": [1.0e-5, 2.0e-5, 3.0e-5]}})
     };
     for bad in [json!(0), json!(-1), json!(1.5)] {
-        let (s, _, v) = call(&st, post("/api/v1/sweeps", &body(bad.clone()), None)).await;
+        let (s, _, v) = app::send(&st, post("/api/v1/sweeps", &body(bad.clone()), None)).await;
         assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{bad}: {v}");
         assert_eq!(v["details"][0]["path"], "max_concurrent", "{bad}: {v}");
     }
-    let (s, _, sw) = call(&st, post("/api/v1/sweeps", &body(json!(2)), None)).await;
+    let (s, _, sw) = app::send(&st, post("/api/v1/sweeps", &body(json!(2)), None)).await;
     assert_eq!(s, StatusCode::CREATED, "{sw}");
     assert_eq!(sw["max_concurrent"], 2);
     let jobs: Vec<String> = sw["jobs"]
@@ -376,7 +357,7 @@ async fn max_concurrent_limits_the_running_jobs_of_a_sweep() {
         .map(|j| j["id"].as_str().unwrap().to_string())
         .collect();
     // A lone job queued after the sweep.
-    let (s, _, lone) = call(&st, post("/api/v1/jobs", &scene(), None)).await;
+    let (s, _, lone) = app::send(&st, post("/api/v1/jobs", &scene(), None)).await;
     assert_eq!(s, StatusCode::CREATED, "{lone}");
     // Two of the sweep's jobs run; the third waits, the lone job is claimed past it.
     let a = claim(&st, "w1").await.unwrap();
@@ -390,13 +371,13 @@ async fn max_concurrent_limits_the_running_jobs_of_a_sweep() {
     );
     assert!(claim(&st, "w4").await.is_none(), "the third waits");
     // One of the two ends: the third may run.
-    let (s, _, v) = call(
+    let (s, _, v) = app::send(
         &st,
         post(&format!("/api/v1/jobs/{}/cancel", a.0), &json!(null), None),
     )
     .await;
     assert_eq!(s, StatusCode::OK, "{v}");
-    let (s, _, v) = call(
+    let (s, _, v) = app::send(
         &st,
         post(
             &format!("/api/v1/worker/jobs/{}/heartbeat", a.0),
@@ -411,7 +392,7 @@ async fn max_concurrent_limits_the_running_jobs_of_a_sweep() {
         "steps": 0, "time_step": 1e-7, "sim_time": 0.0, "particles": 1, "grid_nodes": 1,
         "active_nodes_mean": 0.0, "wall_seconds": 0.0, "particle_steps_per_second": 0.0,
         "threads": 1, "scene_hash": "h", "solver_version": "v"}});
-    let (s, _, v) = call(
+    let (s, _, v) = app::send(
         &st,
         post(
             &format!("/api/v1/worker/jobs/{}/finish", a.0),
@@ -424,7 +405,7 @@ async fn max_concurrent_limits_the_running_jobs_of_a_sweep() {
     let d = claim(&st, "w4").await.unwrap();
     assert_eq!(d.0, jobs[2]);
     // Without a limit every job is claimable at once (and the field is absent).
-    let (_, _, free) = call(
+    let (_, _, free) = app::send(
         &st,
         post(
             "/api/v1/sweeps",
@@ -452,7 +433,7 @@ async fn a_jobs_own_retry_budget_decides_when_a_lost_worker_fails_it() {
         )
     };
     // 0 is refused naming the field, for a job and for a sweep.
-    let (s, _, v) = call(
+    let (s, _, v) = app::send(
         &st,
         post(
             "/api/v1/jobs",
@@ -467,11 +448,11 @@ async fn a_jobs_own_retry_budget_decides_when_a_lost_worker_fails_it() {
         json!({"scene": scene(), "max_attempts": n, "cache": "force",
                "parameters": {"time.end": [1.0e-5, 2.0e-5]}})
     };
-    let (s, _, v) = call(&st, post("/api/v1/sweeps", &sweep(json!(0)), None)).await;
+    let (s, _, v) = app::send(&st, post("/api/v1/sweeps", &sweep(json!(0)), None)).await;
     assert_eq!(s, StatusCode::UNPROCESSABLE_ENTITY, "{v}");
     assert_eq!(v["details"][0]["path"], "max_attempts", "{v}");
     // Budget 1: the first lost worker fails it (the server's default, 3, would re-queue).
-    let (_, _, j) = call(
+    let (_, _, j) = app::send(
         &st,
         post(
             "/api/v1/jobs",
@@ -482,7 +463,7 @@ async fn a_jobs_own_retry_budget_decides_when_a_lost_worker_fails_it() {
     .await;
     assert_eq!(j["max_attempts"], 1, "{j}");
     let (id, fence) = claim(&st, "w1").await.unwrap();
-    let (s, _, j) = call(&st, died(&id, fence)).await;
+    let (s, _, j) = app::send(&st, died(&id, fence)).await;
     assert_eq!(s, StatusCode::OK, "{j}");
     assert_eq!(j["status"], "failed", "{j}");
     assert!(
@@ -490,7 +471,7 @@ async fn a_jobs_own_retry_budget_decides_when_a_lost_worker_fails_it() {
         "{j}"
     );
     // Without one: re-queued after the same death.
-    let (_, _, j) = call(
+    let (_, _, j) = app::send(
         &st,
         post(
             "/api/v1/jobs",
@@ -501,13 +482,13 @@ async fn a_jobs_own_retry_budget_decides_when_a_lost_worker_fails_it() {
     .await;
     assert!(j.get("max_attempts").is_none(), "{j}");
     let (id, fence) = claim(&st, "w2").await.unwrap();
-    let (_, _, j) = call(&st, died(&id, fence)).await;
+    let (_, _, j) = app::send(&st, died(&id, fence)).await;
     assert_eq!(j["status"], "queued", "{j}");
     // A sweep's budget goes to every job; a budget of 2 re-queues once, then fails.
-    let (s, _, sw) = call(&st, post("/api/v1/sweeps", &sweep(json!(2)), None)).await;
+    let (s, _, sw) = app::send(&st, post("/api/v1/sweeps", &sweep(json!(2)), None)).await;
     assert_eq!(s, StatusCode::CREATED, "{sw}");
     let first = sw["jobs"][0]["id"].as_str().unwrap().to_string();
-    let (_, _, j) = call(&st, get(&format!("/api/v1/jobs/{first}"))).await;
+    let (_, _, j) = app::send(&st, get(&format!("/api/v1/jobs/{first}"))).await;
     assert_eq!(j["max_attempts"], 2, "{j}");
     // (the lone job re-queued above is older: claim it out of the way first)
     let (lone, _) = claim(&st, "w3").await.unwrap();
@@ -515,7 +496,7 @@ async fn a_jobs_own_retry_budget_decides_when_a_lost_worker_fails_it() {
     for (k, want) in [(1, "queued"), (2, "failed")] {
         let (cid, fence) = claim(&st, "w4").await.unwrap();
         assert_eq!(cid, first, "attempt {k}");
-        let (_, _, j) = call(&st, died(&cid, fence)).await;
+        let (_, _, j) = app::send(&st, died(&cid, fence)).await;
         assert_eq!(j["status"], want, "attempt {k}: {j}");
     }
 }
