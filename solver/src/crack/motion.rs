@@ -66,8 +66,17 @@ impl Cracks {
                 // Local direction of the crack at point k.
                 let nrm = c.local_normal(k); // above → below
                 let pt = c.pts[k];
-                let from_above = [pt.above[0] - eps * nrm[0], pt.above[1] - eps * nrm[1]];
-                let from_below = [pt.below[0] + eps * nrm[0], pt.below[1] + eps * nrm[1]];
+                // The side tests start just off the line on each surface's own side. A
+                // surface pressed past the line (contact leaves an overlap of a few 1e-3 h)
+                // is lifted back over it: from a point on the wrong side both surfaces would
+                // take the same field, and the faces would stop sliding (seen at 0.125 mm
+                // cells, where a 0.25 µm overlap is 2·eps: the Rosakis bond's slip froze).
+                let up = [-nrm[0], -nrm[1]];
+                let off = |s: [f64; 2]| (s[0] - pt.x[0]) * up[0] + (s[1] - pt.x[1]) * up[1];
+                let lift_a = eps - off(pt.above).min(0.0);
+                let lift_b = eps + off(pt.below).max(0.0);
+                let from_above = [pt.above[0] + lift_a * up[0], pt.above[1] + lift_a * up[1]];
+                let from_below = [pt.below[0] - lift_b * up[0], pt.below[1] - lift_b * up[1]];
                 let va = self.side_velocity(geom, pt.above, from_above, nodes, f1, slot_of);
                 let vb = self.side_velocity(geom, pt.below, from_below, nodes, f1, slot_of);
                 let (va, vb) = match (va, vb) {
