@@ -11,7 +11,9 @@ use crate::particles::{Kin, Mech};
 use crate::shape::Weights2;
 
 use super::Cracks;
-use super::geometry::{crosses, left, norm, seg_normal};
+#[cfg(test)]
+use super::geometry::seg_normal;
+use super::geometry::{crosses, left, norm};
 
 /// A field-1 pair found by the crossing test: storage index of the node, crack, side of the
 /// particle (+1 above, −1 below), normal of the crossed segment.
@@ -43,6 +45,7 @@ impl Cracks {
         fmask: &mut [u16],
         entries: &mut Vec<FieldEntry>,
     ) -> Result<(), (usize, u32)> {
+        let cell = self.h;
         for (i, (k, m)) in kin.iter().zip(mech).enumerate() {
             let segs = self.segs_near(geom, k.x);
             if segs.is_empty() {
@@ -73,11 +76,14 @@ impl Cracks {
                         let (pa, pb) = (c.pts[si as usize].x, c.pts[si as usize + 1].x);
                         if crosses(k.x, node, pa, pb) {
                             match &mut hit {
-                                None => hit = Some((g, 1, left(pa, pb, k.x), seg_normal(pa, pb))),
+                                None => {
+                                    hit =
+                                        Some((g, 1, left(pa, pb, k.x), c.contact_normal(si, cell)))
+                                }
                                 Some(h) if h.0 == g => {
                                     h.1 += 1;
                                     h.2 = left(pa, pb, k.x);
-                                    h.3 = seg_normal(pa, pb);
+                                    h.3 = c.contact_normal(si, cell);
                                 }
                                 Some(_) => other_crack = true,
                             }
@@ -182,5 +188,57 @@ impl Cracks {
         }
         self.entries = entries;
         Ok(())
+    }
+}
+
+#[cfg(test)]
+mod tests {
+    #![allow(clippy::unwrap_used)]
+    use super::Cracks;
+    use crate::grid::GridGeom;
+    use crate::material::Elastic;
+
+    /// An interface along x whose points wiggle by ±0.3 µm (the means of two overlapping
+    /// surfaces do) at 0.125 mm cells: one h/2 segment's normal tilts by about 0.01 rad, the
+    /// contact normal (the chord over the node's support) by less than a tenth of that.
+    #[test]
+    fn an_interfaces_contact_normal_ignores_a_sub_cell_wiggle() {
+        let h = 1.25e-4;
+        let y = 5.0625e-3;
+        let scene = fracture_api::Scene::from_json(
+            &serde_json::json!({
+                "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [0.01, 0.01]},
+                "materials": {"m": {"model": "linear_elastic", "density": 1000.0,
+                                    "youngs_modulus": 1.0e9, "poissons_ratio": 0.3}},
+                "bodies": [{"material": "m", "region": {"rectangle": {"min": [0.001, 0.001], "max": [0.009, 0.009]}}}],
+                "interfaces": [{"points": [[0.002, y], [0.008, y]],
+                                "cohesive": {"law": "linear",
+                                             "normal": {"strength": 1.0e6, "toughness": 10.0},
+                                             "shear": {"strength": 1.0e6, "toughness": 10.0}}}],
+                "time": {"end": 1.0e-6}
+            })
+            .to_string(),
+        )
+        .unwrap();
+        let geom = GridGeom::new(scene.grid.min, scene.grid.max, h);
+        let mats: Vec<Elastic> = scene
+            .materials
+            .values()
+            .map(|m| Elastic::new(m, scene.analysis))
+            .collect();
+        let mut cracks = Cracks::new(&scene, &geom, &mats, 1.0e-8);
+        let c = cracks.cracks.iter_mut().find(|c| c.interface).unwrap();
+        for (k, p) in c.pts.iter_mut().enumerate() {
+            p.x[1] += if k % 2 == 0 { 0.3e-6 } else { -0.3e-6 };
+        }
+        let si = c.pts.len() / 2;
+        let seg = super::seg_normal(c.pts[si].x, c.pts[si + 1].x);
+        let chord = c.contact_normal(si as u32, h);
+        assert!(seg[0].abs() > 5e-3, "the wiggle tilts a segment: {seg:?}");
+        assert!(
+            chord[0].abs() < 0.1 * seg[0].abs(),
+            "chord {chord:?}, segment {seg:?}"
+        );
+        assert!((chord[1].abs() - 1.0).abs() < 1e-9);
     }
 }

@@ -203,6 +203,37 @@ impl Crack {
         geometry::seg_normal(pa, pb)
     }
 
+    /// The contact normal of segment `si` (`fields.rs`): for an interface, the normal of the chord from the
+    /// farthest points within `h` behind its start and ahead of its end, the line's direction
+    /// over a node's support. One h/2 segment's normal tilts by the line's sub-micrometre
+    /// wiggle (the points are the means of two surfaces that contact leaves overlapping) over
+    /// h/2, a tilt that doubles with each halving of h; through the frictionless normal
+    /// impulse it acted as a friction that grew as the cells shrank (the Rosakis bond at
+    /// 0.125 mm, `docs/scene-extensions.md`).
+    ///
+    /// Used for interfaces; a scene crack keeps its segment's normal until the studies whose
+    /// numbers its contact enters (`docs/rosakis.md`) are regenerated with the chord.
+    pub(crate) fn contact_normal(&self, si: u32, h: f64) -> [f64; 2] {
+        let si = si as usize;
+        if !self.interface {
+            return geometry::seg_normal(self.pts[si].x, self.pts[si + 1].x);
+        }
+        self.chord_normal(si, h)
+    }
+
+    /// The normal of the chord around segment `si` (see `contact_normal`).
+    fn chord_normal(&self, si: usize, h: f64) -> [f64; 2] {
+        let n = self.pts.len();
+        let (mut lo, mut hi) = (si, (si + 1).min(n - 1));
+        while lo > 0 && geometry::dist(self.pts[lo - 1].x, self.pts[si].x) <= h {
+            lo -= 1;
+        }
+        while hi + 1 < n && geometry::dist(self.pts[hi + 1].x, self.pts[si + 1].x) <= h {
+            hi += 1;
+        }
+        geometry::seg_normal(self.pts[lo].x, self.pts[hi].x)
+    }
+
     /// Tip position and outward unit direction e1 of tip `t`.
     pub fn tip_frame(&self, t: usize) -> ([f64; 2], [f64; 2]) {
         let n = self.pts.len();
