@@ -194,10 +194,6 @@ impl Cracks {
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)]
-    use super::Cracks;
-    use crate::grid::GridGeom;
-    use crate::material::Elastic;
-
     /// An interface along x whose points wiggle by ±0.3 µm (the means of two overlapping
     /// surfaces do) at 0.125 mm cells: one h/2 segment's normal tilts by about 0.01 rad, the
     /// contact normal (the chord over the node's support) by less than a tenth of that.
@@ -205,28 +201,16 @@ mod tests {
     fn an_interfaces_contact_normal_ignores_a_sub_cell_wiggle() {
         let h = 1.25e-4;
         let y = 5.0625e-3;
-        let scene = fracture_api::Scene::from_json(
-            &serde_json::json!({
-                "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [0.01, 0.01]},
-                "materials": {"m": {"model": "linear_elastic", "density": 1000.0,
-                                    "youngs_modulus": 1.0e9, "poissons_ratio": 0.3}},
-                "bodies": [{"material": "m", "region": {"rectangle": {"min": [0.001, 0.001], "max": [0.009, 0.009]}}}],
-                "interfaces": [{"points": [[0.002, y], [0.008, y]],
+        let (_, mut cracks) = super::super::test_cracks(
+            h,
+            [0.01, 0.01],
+            [[0.001, 0.001], [0.009, 0.009]],
+            "interfaces",
+            serde_json::json!([{"points": [[0.002, y], [0.008, y]],
                                 "cohesive": {"law": "linear",
                                              "normal": {"strength": 1.0e6, "toughness": 10.0},
-                                             "shear": {"strength": 1.0e6, "toughness": 10.0}}}],
-                "time": {"end": 1.0e-6}
-            })
-            .to_string(),
-        )
-        .unwrap();
-        let geom = GridGeom::new(scene.grid.min, scene.grid.max, h);
-        let mats: Vec<Elastic> = scene
-            .materials
-            .values()
-            .map(|m| Elastic::new(m, scene.analysis))
-            .collect();
-        let mut cracks = Cracks::new(&scene, &geom, &mats, 1.0e-8);
+                                             "shear": {"strength": 1.0e6, "toughness": 10.0}}}]),
+        );
         let c = cracks.cracks.iter_mut().find(|c| c.interface).unwrap();
         for (k, p) in c.pts.iter_mut().enumerate() {
             p.x[1] += if k % 2 == 0 { 0.3e-6 } else { -0.3e-6 };

@@ -611,3 +611,33 @@ impl View<'_> {
         }
     }
 }
+
+/// For unit tests: the grid and the cracks of a scene given as JSON whose body is one
+/// material "m" (ρ 1000, E 1 GPa, ν 0.3) filling `body`, with `lines` its `cracks` or
+/// `interfaces` entries (`key`).
+#[cfg(test)]
+pub(crate) fn test_cracks(
+    h: f64,
+    max: [f64; 2],
+    body: [[f64; 2]; 2],
+    key: &str,
+    lines: serde_json::Value,
+) -> (GridGeom, Cracks) {
+    let mut doc = serde_json::json!({
+        "grid": {"cell_size": h, "min": [0.0, 0.0], "max": max},
+        "materials": {"m": {"model": "linear_elastic", "density": 1000.0,
+                            "youngs_modulus": 1.0e9, "poissons_ratio": 0.3}},
+        "bodies": [{"material": "m", "region": {"rectangle": {"min": body[0], "max": body[1]}}}],
+        "time": {"end": 1.0e-6}
+    });
+    doc[key] = lines;
+    let scene = Scene::from_json(&doc.to_string()).expect("a valid test scene");
+    let geom = GridGeom::new(scene.grid.min, scene.grid.max, h);
+    let mats: Vec<Elastic> = scene
+        .materials
+        .values()
+        .map(|m| Elastic::new(m, scene.analysis))
+        .collect();
+    let cracks = Cracks::new(&scene, &geom, &mats, 1.0e-8);
+    (geom, cracks)
+}

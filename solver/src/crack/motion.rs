@@ -109,9 +109,7 @@ impl Cracks {
 #[cfg(test)]
 mod tests {
     #![allow(clippy::unwrap_used)]
-    use super::Cracks;
-    use crate::grid::{GridGeom, Node};
-    use crate::material::Elastic;
+    use crate::grid::Node;
 
     /// A crack along x at mid-cell; the material above moves at +1 m/s along x and the
     /// material below at −1 m/s (on each node, field 0 holds the node's own side and field 1
@@ -124,26 +122,14 @@ mod tests {
     fn overlapping_surfaces_still_move_with_their_own_sides() {
         let h = 1.0e-3;
         let y = 10.5e-3;
-        let scene = fracture_api::Scene::from_json(
-            &serde_json::json!({
-                "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [0.02, 0.021]},
-                "materials": {"m": {"model": "linear_elastic", "density": 1000.0,
-                                    "youngs_modulus": 1.0e9, "poissons_ratio": 0.3}},
-                "bodies": [{"material": "m", "region": {"rectangle": {"min": [0.002, 0.002], "max": [0.018, 0.019]}}}],
-                "cracks": [{"points": [[0.0, y], [0.0105, y]]}],
-                "time": {"end": 1.0e-6}
-            })
-            .to_string(),
-        )
-        .unwrap();
-        let geom = GridGeom::new(scene.grid.min, scene.grid.max, h);
-        let mats: Vec<Elastic> = scene
-            .materials
-            .values()
-            .map(|m| Elastic::new(m, scene.analysis))
-            .collect();
         let dt = 1.0e-8;
-        let mut cracks = Cracks::new(&scene, &geom, &mats, dt);
+        let (geom, mut cracks) = super::super::test_cracks(
+            h,
+            [0.02, 0.021],
+            [[0.002, 0.002], [0.018, 0.019]],
+            "cracks",
+            serde_json::json!([{"points": [[0.0, y], [0.0105, y]]}]),
+        );
         cracks.build_broad_phase(&geom);
         let storage = geom.index(geom.nx - 1, geom.ny - 1) + 1;
         let (mut nodes, mut f1) = (
