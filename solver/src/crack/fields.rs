@@ -11,8 +11,6 @@ use crate::particles::{Kin, Mech};
 use crate::shape::Weights2;
 
 use super::Cracks;
-#[cfg(test)]
-use super::geometry::seg_normal;
 use super::geometry::{crosses, left, norm};
 
 /// A field-1 pair found by the crossing test: storage index of the node, crack, side of the
@@ -216,7 +214,7 @@ mod tests {
             p.x[1] += if k % 2 == 0 { 0.3e-6 } else { -0.3e-6 };
         }
         let si = c.pts.len() / 2;
-        let seg = super::seg_normal(c.pts[si].x, c.pts[si + 1].x);
+        let seg = crate::crack::geometry::seg_normal(c.pts[si].x, c.pts[si + 1].x);
         let chord = c.contact_normal(si as u32, h);
         assert!(seg[0].abs() > 5e-3, "the wiggle tilts a segment: {seg:?}");
         assert!(

@@ -203,9 +203,9 @@ impl Crack {
         geometry::seg_normal(pa, pb)
     }
 
-    /// The contact normal of segment `si` (`fields.rs`): for an interface, the normal of the chord from the
-    /// farthest points within `h` behind its start and ahead of its end, the line's direction
-    /// over a node's support. One h/2 segment's normal tilts by the line's sub-micrometre
+    /// The contact normal of segment `si` (`fields.rs`): for an interface, the normal of the
+    /// chord from the farthest points within `h` behind its start and ahead of its end, the
+    /// line's direction over a node's support. One h/2 segment's normal tilts by the line's sub-micrometre
     /// wiggle (the points are the means of two surfaces that contact leaves overlapping) over
     /// h/2, a tilt that doubles with each halving of h; through the frictionless normal
     /// impulse it acted as a friction that grew as the cells shrank (the Rosakis bond at
