@@ -58,7 +58,7 @@ pub struct Particles {
     /// reused by the later passes (which must use the same weights, `algorithm.md` pitfall 2).
     /// Scratch of the step: not in checkpoints.
     #[serde(skip)]
-    pub wts: Vec<crate::shape::Weights2>,
+    pub wts: Vec<crate::shape::CachedW2>,
     /// Displacement gradient (∂ux/∂x, ∂ux/∂y, ∂uy/∂x, ∂uy/∂y), accumulated as Σ L·Δt; only
     /// the J-integral needs it, so it is empty (never computed) when the scene has no cracks.
     pub grad_u: Vec<[f64; 4]>,
@@ -95,7 +95,7 @@ pub struct PartsMut<'a> {
     /// Displacement gradients (empty without cracks).
     pub grad_u: &'a mut [[f64; 4]],
     /// Weights of the step.
-    pub wts: &'a mut [crate::shape::Weights2],
+    pub wts: &'a mut [crate::shape::CachedW2],
 }
 
 impl<'a> PartsMut<'a> {

@@ -168,6 +168,73 @@ impl Weights2 {
     }
 }
 
+/// Storage type of the cached outer weights (`CachedW2`).
+pub type WeightFloat = f32;
+
+/// One direction of [`CachedW2`]: the stencil base and the outer two nodes' S and dS/dξ.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CachedW1 {
+    /// Index of the first node.
+    pub base: i32,
+    /// S of the first and last node.
+    pub s: [WeightFloat; 2],
+    /// dS/dξ of the first and last node.
+    pub ds: [WeightFloat; 2],
+}
+
+/// The shape-function weights a particle's P2G caches for the step's later passes
+/// (`algorithm.md` §2 allows cached per-step quantities in f32): per direction the base and
+/// the outer nodes' S and S' rounded to f32; the middle node follows from Σ S = 1 and
+/// Σ S' = 0 in f64 (as `gimp_weights_1d` computes it), so the unpacked weights keep the
+/// partition of unity to the last bit of f64. 40 bytes instead of `Weights2`'s 112.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct CachedW2 {
+    /// x.
+    pub x: CachedW1,
+    /// y.
+    pub y: CachedW1,
+}
+
+impl CachedW1 {
+    #[inline(always)]
+    fn pack(w: &Weights1) -> CachedW1 {
+        CachedW1 {
+            base: w.base,
+            s: [w.s[0] as WeightFloat, w.s[2] as WeightFloat],
+            ds: [w.ds[0] as WeightFloat, w.ds[2] as WeightFloat],
+        }
+    }
+    #[inline(always)]
+    fn unpack(&self) -> Weights1 {
+        let (s0, s2) = (f64::from(self.s[0]), f64::from(self.s[1]));
+        let (d0, d2) = (f64::from(self.ds[0]), f64::from(self.ds[1]));
+        Weights1 {
+            base: self.base,
+            s: [s0, 1.0 - s0 - s2, s2],
+            ds: [d0, -d0 - d2, d2],
+        }
+    }
+}
+
+impl CachedW2 {
+    /// The cached form of `w`.
+    #[inline(always)]
+    pub fn pack(w: &Weights2) -> CachedW2 {
+        CachedW2 {
+            x: CachedW1::pack(&w.x),
+            y: CachedW1::pack(&w.y),
+        }
+    }
+    /// The weights the passes use: the outer ones as stored, the middle from Σ S = 1, Σ S' = 0.
+    #[inline(always)]
+    pub fn unpack(&self) -> Weights2 {
+        Weights2 {
+            x: self.x.unpack(),
+            y: self.y.unpack(),
+        }
+    }
+}
+
 #[cfg(test)]
 mod tests {
     use super::*;

@@ -69,6 +69,71 @@ pub struct BenchArgs {
     /// `portable` or `fma`.
     #[arg(long, value_enum, default_value_t = KernelArg::Auto)]
     pub kernel: KernelArg,
+    /// The case of the single throughput run (what `--instructions` and `ab` run).
+    #[arg(long, value_enum, default_value_t = CaseArg::NoCrack)]
+    pub case: CaseArg,
+    /// Throughput matrix: also count instructions per particle-step of each case under
+    /// valgrind's cachegrind (one thread, 0.002 m cells; skipped with a note where valgrind
+    /// is not installed).
+    #[arg(long)]
+    pub instructions: bool,
+    /// `ab`: the baseline `fracture` binary (built from the stated baseline commit).
+    #[arg(long)]
+    pub baseline: Option<std::path::PathBuf>,
+    /// `ab`: interleaved pairs (baseline, this binary).
+    #[arg(long, default_value_t = 7)]
+    pub pairs: usize,
+}
+
+impl BenchArgs {
+    /// The single run that `bench throughput --instructions` counts: `case` on one thread,
+    /// one warm-up step, `steps` steps, JSON output.
+    pub fn for_instructions(case: CaseArg, cell_size: f64, steps: u64, kernel: KernelArg) -> Self {
+        BenchArgs {
+            kind: None,
+            steps,
+            warmup: 1,
+            threads: fracture_solver::Parallelism::threads(1),
+            thread_counts: vec![1],
+            cell_size,
+            particles_per_cell: 2,
+            history_every: 1,
+            ladder: crate::bench::accuracy::Ladder::Full,
+            cost: crate::bench::accuracy::Cost::Wall,
+            families: Vec::new(),
+            quick: false,
+            out: None,
+            json: true,
+            kernel,
+            case,
+            instructions: false,
+            baseline: None,
+            pairs: 1,
+        }
+    }
+}
+
+/// `--case`.
+#[derive(clap::ValueEnum, Clone, Copy, Debug, PartialEq, Eq)]
+pub enum CaseArg {
+    /// The seed block without a crack.
+    NoCrack,
+    /// With a 50 mm edge crack, J and K of its tip at every history sample.
+    Crack,
+    /// With that crack propagating.
+    Propagation,
+}
+
+impl CaseArg {
+    /// The throughput matrix's case.
+    pub fn case(self) -> crate::bench::throughput::Case {
+        use crate::bench::throughput::Case;
+        match self {
+            CaseArg::NoCrack => Case::NoCrack,
+            CaseArg::Crack => Case::Crack,
+            CaseArg::Propagation => Case::Propagation,
+        }
+    }
 }
 
 /// `--kernel`.
@@ -110,6 +175,10 @@ pub enum BenchKind {
     /// What a scene does not pay for: crack code, J between samples, inactive grid,
     /// unrequested snapshot fields.
     Skip,
+    /// Interleaved A/B runs of the single throughput run (`--case`, `--threads`, `--kernel`)
+    /// against a baseline binary (`--baseline`), `--pairs` pairs: medians, ratio of the
+    /// medians and median of the pair ratios.
+    Ab,
     /// All three, into `<out>/throughput`, `<out>/skip` and `<out>/accuracy` (default
     /// `out/bench`): the one command that regenerates every figure of `docs/performance.md`
     /// and `docs/accuracy.md`.
@@ -157,6 +226,7 @@ pub fn bench_block(cell_size: f64, ppc: u32, steps: u64) -> anyhow::Result<Scene
 #[derive(Debug, serde::Serialize)]
 struct Throughput {
     benchmark: &'static str,
+    case: &'static str,
     particles: usize,
     grid_nodes: usize,
     cell_size: f64,
@@ -172,7 +242,13 @@ struct Throughput {
 }
 
 fn throughput(a: &BenchArgs) -> anyhow::Result<Result<Throughput, String>> {
-    let scene = bench_block(a.cell_size, a.particles_per_cell, a.warmup + a.steps)?;
+    let case = a.case.case();
+    let scene = crate::bench::throughput::case_scene(
+        case,
+        a.cell_size,
+        a.particles_per_cell,
+        a.warmup + a.steps,
+    )?;
     if let Err(e) = validate_scene(&scene) {
         anyhow::bail!("the benchmark block is not a valid scene:\n{e}");
     }
@@ -181,23 +257,32 @@ fn throughput(a: &BenchArgs) -> anyhow::Result<Result<Throughput, String>> {
         SolverConfig { threads: a.threads },
     )
     .context("building the benchmark block")?;
+    let mut start = Instant::now();
     sim.set_kernel(a.kernel.kernel()?);
-    for _ in 0..a.warmup {
+    // With a crack, J and K of every tip at every `--history-every`-th step, as the matrix.
+    let every = a.history_every.max(1);
+    let sampled = case != crate::bench::throughput::Case::NoCrack;
+    for k in 1..=(a.warmup + a.steps) {
+        if k == a.warmup + 1 {
+            start = Instant::now();
+        }
         if let Err(e) = sim.step() {
             return Ok(Err(e.to_string()));
         }
-    }
-    let start = Instant::now();
-    for _ in 0..a.steps {
-        if let Err(e) = sim.step() {
-            return Ok(Err(e.to_string()));
+        if sampled && k.is_multiple_of(every) {
+            let _ = sim.crack_tips();
         }
     }
-    let wall = start.elapsed().as_secs_f64();
+    let wall = if a.steps > 0 {
+        start.elapsed().as_secs_f64()
+    } else {
+        0.0
+    };
     let particles = sim.particle_count();
     let rate = |n: f64| if wall > 0.0 { n / wall } else { 0.0 };
     Ok(Ok(Throughput {
         benchmark: "throughput",
+        case: case.name(),
         particles,
         grid_nodes: sim.grid_node_count(),
         cell_size: a.cell_size,
@@ -285,6 +370,7 @@ fn bench_kind(kind: BenchKind, a: &BenchArgs) -> ExitCode {
             .try_for_each(|k| {
                 let name = match k {
                     BenchKind::Throughput => "throughput",
+                    BenchKind::Ab => "ab",
                     BenchKind::Skip => "skip",
                     _ => "accuracy",
                 };
@@ -335,10 +421,19 @@ fn bench_one(
                 threads: a.thread_counts.clone(),
                 history_every: a.history_every,
                 kernel: a.kernel.kernel()?,
+                instructions: a.instructions.then_some(a.kernel),
             },
             out.as_deref(),
         )
         .map(|_| ()),
+        BenchKind::Ab => {
+            let Some(base) = a.baseline.as_deref() else {
+                anyhow::bail!(
+                    "bench ab needs --baseline PATH (a fracture binary of the baseline commit)"
+                );
+            };
+            super::ab::run(base, a, out.as_deref()).map(|_| ())
+        }
         BenchKind::Skip => skip::run(
             &skip::Options {
                 cell_size: a.cell_size,

@@ -5,6 +5,7 @@
 //! benchmarks measure with (the median step, CPU time, the machine); their tables and plots
 //! are drawn with [`crate::report`].
 
+pub mod ab;
 pub mod accuracy;
 pub mod accuracy_plot;
 pub mod command;

@@ -12,7 +12,7 @@ use fracture_api::Scene;
 use fracture_api::validate::scene_from_value;
 use fracture_solver::grid::Node;
 use fracture_solver::particles::{Cold, Kin, Mech};
-use fracture_solver::shape::Weights2;
+use fracture_solver::shape::CachedW2;
 use fracture_solver::{Simulation, SolverConfig};
 use rayon::prelude::*;
 
@@ -102,6 +102,9 @@ pub struct Run {
     pub model_gb_per_s: f64,
     /// That over the triad bandwidth on the same thread count.
     pub fraction_of_bandwidth: f64,
+    /// Instructions per particle-step of the case (cachegrind, one thread, 0.002 m cells,
+    /// 20 steps; `--instructions`), where counted.
+    pub instructions_per_particle_step: Option<f64>,
 }
 
 /// Options of the matrix.
@@ -121,6 +124,9 @@ pub struct Options {
     pub history_every: u64,
     /// Arithmetic of the particle passes.
     pub kernel: fracture_solver::kernel::Kernel,
+    /// Count instructions per particle-step under cachegrind with this kernel argument
+    /// (`--instructions`).
+    pub instructions: Option<super::command::KernelArg>,
 }
 
 /// The bytes-per-particle-step model: bytes of the particle arrays each of the four passes
@@ -144,7 +150,7 @@ impl BytesModel {
         let mech = std::mem::size_of::<Mech>() as f64;
         let stress = 32.0; // [f64; 4]
         let xn = 16.0; // x_next [f64; 2]
-        let wts = std::mem::size_of::<Weights2>() as f64;
+        let wts = std::mem::size_of::<CachedW2>() as f64;
         let cold = std::mem::size_of::<Cold>() as f64;
         let (mask, grad) = (2.0, 32.0);
         // P2G: read kin, mech (unless fused into the last strain update, which has them);
@@ -272,6 +278,7 @@ fn time_case(case: Case, threads: usize, o: &Options) -> anyhow::Result<(Run, f6
             bytes_per_particle_step: model.total(),
             model_gb_per_s: model.total() * rate / 1e9,
             fraction_of_bandwidth: f64::NAN,
+            instructions_per_particle_step: None,
         },
         nodes_per_particle,
     ))
@@ -296,7 +303,12 @@ pub struct Report {
     pub kernel: &'static str,
     /// The runs.
     pub runs: Vec<Run>,
+    /// Why instructions were asked for and not counted.
+    pub instructions_note: Option<&'static str>,
 }
+
+/// Cell size (m) of the instruction counts (31,250 particles: a cachegrind run of seconds).
+pub const INSTRUCTIONS_CELL: f64 = 0.002;
 
 /// Run the matrix; print the Markdown table; write `throughput.csv`, `throughput.json` and
 /// `throughput.md` into `out` when given.
@@ -311,9 +323,26 @@ pub fn run(o: &Options, out: Option<&Path>) -> anyhow::Result<Report> {
     }
     let mut runs = Vec::new();
     let mut npp = 0.25;
+    let mut instructions_note = None;
     for case in Case::ALL {
+        let instructions = match o.instructions {
+            Some(k) => {
+                let c = match case {
+                    Case::NoCrack => super::command::CaseArg::NoCrack,
+                    Case::Crack => super::command::CaseArg::Crack,
+                    Case::Propagation => super::command::CaseArg::Propagation,
+                };
+                let n = super::ab::instructions_per_particle_step(c, INSTRUCTIONS_CELL, 20, k)?;
+                if n.is_none() {
+                    instructions_note = Some("valgrind is not installed: no instruction counts");
+                }
+                n
+            }
+            None => None,
+        };
         for &t in &o.threads {
             let (mut r, nodes) = time_case(case, t, o)?;
+            r.instructions_per_particle_step = instructions;
             npp = nodes;
             let bw = triad
                 .iter()
@@ -336,6 +365,7 @@ pub fn run(o: &Options, out: Option<&Path>) -> anyhow::Result<Report> {
         model_crack: BytesModel::new(true, npp),
         kernel: o.kernel.name(),
         runs,
+        instructions_note,
     };
     let md = markdown(&report);
     #[allow(clippy::print_stdout)]
@@ -350,7 +380,7 @@ pub fn run(o: &Options, out: Option<&Path>) -> anyhow::Result<Report> {
             &serde_json::to_string_pretty(&report)?,
         )?;
         let mut csv = String::from(
-            "case,threads,particles,steps,wall_seconds,particle_steps_per_second,median_particle_steps_per_second,j_evaluations,growth_steps,bytes_per_particle_step,model_gb_per_s,fraction_of_bandwidth\n",
+            "case,threads,particles,steps,wall_seconds,particle_steps_per_second,median_particle_steps_per_second,j_evaluations,growth_steps,bytes_per_particle_step,model_gb_per_s,fraction_of_bandwidth,instructions_per_particle_step\n",
         );
         for r in &report.runs {
             csv.push_str(&csv_line(&[
@@ -366,6 +396,8 @@ pub fn run(o: &Options, out: Option<&Path>) -> anyhow::Result<Report> {
                 format!("{:.1}", r.bytes_per_particle_step),
                 format!("{:.3}", r.model_gb_per_s),
                 format!("{:.4}", r.fraction_of_bandwidth),
+                r.instructions_per_particle_step
+                    .map_or(String::new(), |n| format!("{n:.1}")),
             ]));
         }
         write_file(out, "throughput.csv", &csv)?;
@@ -399,6 +431,8 @@ fn markdown(r: &Report) -> String {
                 format!("{:.0}", x.bytes_per_particle_step),
                 sig(x.model_gb_per_s, 3),
                 format!("{:.0} %", 100.0 * x.fraction_of_bandwidth),
+                x.instructions_per_particle_step
+                    .map_or("–".into(), |n| format!("{n:.0}")),
             ]
         })
         .collect();
@@ -414,6 +448,7 @@ fn markdown(r: &Report) -> String {
             "model B/particle-step",
             "model GB/s",
             "of triad bandwidth",
+            "instructions/particle-step",
         ],
         &rows,
     ));
@@ -434,5 +469,18 @@ fn markdown(r: &Report) -> String {
         std::mem::size_of::<Node>(),
         r.model_no_crack.grid / (16.0 * std::mem::size_of::<Node>() as f64),
     ));
+    if r.runs
+        .iter()
+        .any(|x| x.instructions_per_particle_step.is_some())
+    {
+        s.push_str(&format!(
+            "\nInstructions per particle-step: valgrind's cachegrind on `fracture bench --case \
+             <case> --threads 1` at {INSTRUCTIONS_CELL} m cells, 21 steps less 1 (set-up and \
+             the first step subtracted); the same for every thread count.\n"
+        ));
+    }
+    if let Some(n) = r.instructions_note {
+        s.push_str(&format!("\n{n}.\n"));
+    }
     s
 }

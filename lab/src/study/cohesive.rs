@@ -518,7 +518,7 @@ impl Page<'_> {
         let mut rows = Vec::new();
         for b in &sw.runs {
             let Some((m, f)) = self.get(b) else { continue };
-            series.push(((sw.legend)(b), m.box_speed(BOX)));
+            series.push(((sw.legend)(b), m.box_speed_us(BOX)));
             let status = match m.status {
                 RunStatus::Completed => String::new(),
                 st => format!(" ({st:?}: {})", m.message.clone().unwrap_or_default()),

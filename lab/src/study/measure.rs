@@ -103,6 +103,14 @@ impl Measured {
             .map(|&t| [t, (self.x_at(t + 0.5 * w) - self.x_at(t - 0.5 * w)) / w])
             .collect()
     }
+    /// [`box_speed`](Self::box_speed) with the time in µs, the unit of the speed figures'
+    /// axis (`figures::speed_plot`).
+    pub(super) fn box_speed_us(&self, w: f64) -> Vec<[f64; 2]> {
+        self.box_speed(w)
+            .iter()
+            .map(|p| [p[0] * 1e6, p[1]])
+            .collect()
+    }
     /// Of the running samples (those whose step advanced the tip), how many have J1 below
     /// −`frac`·Γ, and how many there are.
     pub(super) fn negative_j(&self, gamma: f64, frac: f64) -> (usize, usize) {
@@ -320,6 +328,12 @@ mod tests {
         let b = m.box_speed(2.0e-6);
         assert!(b.iter().all(|p| p[1] >= -1e-9 && p[1] <= 1000.0 + 1e-6));
         assert!(b.iter().any(|p| (p[1] - 1000.0).abs() < 1e-6));
+        // The figures' samples span the run's 40 µs in µs (the cohesive page once drew every
+        // curve at t = 0, its samples in s on an axis in µs).
+        let bu = m.box_speed_us(2.0e-6);
+        let span = bu.iter().map(|p| p[0]).fold(0.0, f64::max);
+        assert!((38.0..=40.0).contains(&span), "last sample at {span} µs");
+        assert_eq!(bu.len(), b.len());
         assert_eq!(slow_down(&m, 2.0e-6).0, None);
     }
 

@@ -191,11 +191,7 @@ impl Report<'_> {
         let mut series = Vec::new();
         for v in &sw.runs {
             if let Some(m) = self.get(sw, v) {
-                let pts: Vec<[f64; 2]> = m
-                    .box_speed(self.a.window)
-                    .iter()
-                    .map(|p| [p[0] * 1e6, p[1]])
-                    .collect();
+                let pts = m.box_speed_us(self.a.window);
                 for p in &pts {
                     series_csv.push_str(&csv_line(&[
                         sw.id.to_string(),

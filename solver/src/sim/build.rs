@@ -69,7 +69,7 @@ impl Simulation {
                 body: s.body,
             });
             parts.x_next.push(s.x);
-            parts.wts.push(crate::shape::Weights2::default());
+            parts.wts.push(crate::shape::CachedW2::default());
             id += 1;
         });
         let n = parts.len();

@@ -19,7 +19,7 @@ use crate::grid::{GridGeom, GridMut, Reduce, STRIP, for_strips};
 use crate::kernel::{Arith, Fma, Kernel, Portable, madd};
 use crate::material::Elastic;
 use crate::particles::PartsMut;
-use crate::shape::{Weights2, gimp_weights_1d};
+use crate::shape::{CachedW2, Weights2, gimp_weights_1d};
 
 /// Reduction of a particle pass: partial sums and the first offending particle.
 #[derive(Debug, Clone, Copy, Default)]
@@ -180,8 +180,11 @@ fn p2g_particle<A: Arith>(
     let geom = &cx.geom;
     let k = p.kin[i];
     let m = p.mech[i].m;
-    p.wts[i] = cx.weights(k.x, p.mech[i].lh, lq);
-    let w = &p.wts[i];
+    // The weights the later passes will read back from the cache (`CachedW2`), used here too
+    // so that all four passes see the same S and ∇S.
+    let packed = CachedW2::pack(&cx.weights(k.x, p.mech[i].lh, lq));
+    p.wts[i] = packed;
+    let w = &packed.unpack();
     grow_box(acc, w);
     let cracks = cx.cracks;
     let (mask, disp) = if cracks {
@@ -305,7 +308,8 @@ impl Simulation {
                     };
                     let vs = mech.vol * inv_h;
                     let field0 = field0_ok && mask == 0;
-                    with_stencil!(field0, &mut g, &geom, &p.wts[i], mask, &slot_of, |st| {
+                    let wi = p.wts[i].unpack();
+                    with_stencil!(field0, &mut g, &geom, &wi, mask, &slot_of, |st| {
                         let l = gather_l::<A>(&mut st);
                         let mat = &mats[mech.mat as usize];
                         let gu = p.grad_u.get_mut(i);
@@ -372,7 +376,7 @@ impl Simulation {
                 for i in 0..p.len() {
                     let k = p.kin[i];
                     let mech = p.mech[i];
-                    let w = &p.wts[i];
+                    let w = &p.wts[i].unpack();
                     let mask = if has_mask { p.fmask[i] } else { 0 };
                     let field0 = field0_ok && mask == 0;
                     with_stencil!(field0, &mut g, &geom, w, mask, &slot_of, |st| {
@@ -496,20 +500,20 @@ impl Simulation {
                 let mut lq = (f64::NAN, f64::NAN);
                 for i in 0..p.len() {
                     let mech = p.mech[i];
-                    let ok =
-                        with_stencil!(field0_ok, &mut gc, &geom, &p.wts[i], 0, &slot_of, |st| {
-                            let l = gather_l::<A>(&mut st);
-                            let mat = &mats[mech.mat as usize];
-                            stress_apply::<A>(
-                                mat,
-                                &mut p.stress[i],
-                                &mut p.mech[i].w,
-                                None,
-                                l,
-                                half,
-                                inv_h,
-                            )
-                        });
+                    let wi = p.wts[i].unpack();
+                    let ok = with_stencil!(field0_ok, &mut gc, &geom, &wi, 0, &slot_of, |st| {
+                        let l = gather_l::<A>(&mut st);
+                        let mat = &mats[mech.mat as usize];
+                        stress_apply::<A>(
+                            mat,
+                            &mut p.stress[i],
+                            &mut p.mech[i].w,
+                            None,
+                            l,
+                            half,
+                            inv_h,
+                        )
+                    });
                     if !ok {
                         first_fail(&mut acc, first + i, FAIL_STRESS);
                     }
@@ -590,21 +594,21 @@ impl Simulation {
                     let mech = p.mech[i];
                     let mask = if has_mask { p.fmask[i] } else { 0 };
                     let field0 = field0_ok && mask == 0;
-                    let ok =
-                        with_stencil!(field0, &mut g, &geom, &p.wts[i], mask, &slot_of, |st| {
-                            let l = gather_l::<A>(&mut st);
-                            let mat = &mats[mech.mat as usize];
-                            let gu = p.grad_u.get_mut(i);
-                            stress_apply::<A>(
-                                mat,
-                                &mut p.stress[i],
-                                &mut p.mech[i].w,
-                                gu,
-                                l,
-                                half,
-                                inv_h,
-                            )
-                        });
+                    let wi = p.wts[i].unpack();
+                    let ok = with_stencil!(field0, &mut g, &geom, &wi, mask, &slot_of, |st| {
+                        let l = gather_l::<A>(&mut st);
+                        let mat = &mats[mech.mat as usize];
+                        let gu = p.grad_u.get_mut(i);
+                        stress_apply::<A>(
+                            mat,
+                            &mut p.stress[i],
+                            &mut p.mech[i].w,
+                            gu,
+                            l,
+                            half,
+                            inv_h,
+                        )
+                    });
                     if !ok {
                         first_fail(&mut acc, first + i, FAIL_STRESS);
                     }
