@@ -531,6 +531,94 @@ fn bench_skip_and_throughput_matrix_run_ci_sized() {
     assert!(out.join("throughput.csv").is_file());
 }
 
+/// `bench ab` runs interleaved pairs against a baseline binary (here this one) and reports
+/// both medians; without `--baseline` it names the missing option. `bench throughput
+/// --instructions` counts instructions per particle-step where valgrind is installed (a
+/// plausible count: the step is ~1,000 instructions per particle) and says so where not.
+#[test]
+fn bench_ab_and_instruction_counts_run_ci_sized() {
+    let dir = tempfile::tempdir().unwrap();
+    let small = [
+        "--cell-size",
+        "0.005",
+        "--steps",
+        "2",
+        "--warmup",
+        "1",
+        "--threads",
+        "1",
+    ];
+    let out = dir.path().join("ab");
+    let mut args = vec![
+        "bench",
+        "ab",
+        "--baseline",
+        env!("CARGO_BIN_EXE_fracture"),
+        "--pairs",
+        "2",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(small);
+    let o = fracture(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("ab.json")).unwrap()).unwrap();
+    assert_eq!(v["samples"].as_array().unwrap().len(), 4);
+    let sides: Vec<&str> = v["samples"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["side"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        sides,
+        ["baseline", "this", "this", "baseline"],
+        "interleaved"
+    );
+    assert!(v["ratio_of_medians"].as_f64().unwrap() > 0.0);
+    let o = fracture(&["bench", "ab", "--pairs", "1"]);
+    assert_ne!(o.status.code(), Some(0));
+    assert!(stderr(&o).contains("--baseline"), "{}", stderr(&o));
+
+    let out = dir.path().join("tp");
+    let mut args = vec![
+        "bench",
+        "throughput",
+        "--instructions",
+        "--thread-counts",
+        "1",
+        "--out",
+        out.to_str().unwrap(),
+    ];
+    args.extend(small);
+    let o = fracture(&args);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    let v: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("throughput.json")).unwrap())
+            .unwrap();
+    let has_valgrind = std::process::Command::new("valgrind")
+        .arg("--version")
+        .output()
+        .is_ok();
+    for r in v["runs"].as_array().unwrap() {
+        let n = r["instructions_per_particle_step"].as_f64();
+        if has_valgrind {
+            let n = n.unwrap();
+            assert!(
+                (200.0..20_000.0).contains(&n),
+                "{n} instructions per particle-step"
+            );
+        } else {
+            assert!(n.is_none());
+        }
+    }
+    if !has_valgrind {
+        let md = std::fs::read_to_string(out.join("throughput.md")).unwrap();
+        assert!(md.contains("valgrind is not installed"), "{md}");
+    }
+}
+
 #[test]
 fn overflowing_wave_speed_names_the_density() {
     // Each constant is positive, but E/ρ overflows: no time step (it was "needs NaN steps").

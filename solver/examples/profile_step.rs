@@ -48,15 +48,7 @@ fn main() {
     for i in 0..p.len() {
         let (k, s) = (p.kin[i], p.stress[i]);
         for v in [
-            k.x[0],
-            k.x[1],
-            k.v[0],
-            k.v[1],
-            s[0],
-            s[1],
-            s[2],
-            s[3],
-            p.mech[i].w,
+            k.x[0], k.x[1], k.v[0], k.v[1], s[0], s[1], s[2], s[3], p.wden[i],
         ] {
             hash = (hash ^ v.to_bits()).wrapping_mul(0x0100_0000_01b3);
         }

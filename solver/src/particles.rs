@@ -20,8 +20,6 @@ pub struct Mech {
     pub vol: f64,
     /// Half-width l in cell units (h/(2·ppc)/h).
     pub lh: f64,
-    /// Strain energy density W (J/m³).
-    pub w: f64,
     /// Material index.
     pub mat: u32,
     /// 1 + index of the load acting on the particle, 0 for none.
@@ -50,10 +48,9 @@ pub struct Particles {
     pub stress: Vec<[f64; 4]>,
     /// Metadata.
     pub cold: Vec<Cold>,
-    /// Position at the end of the step being computed (scratch of the particle update;
-    /// not in checkpoints).
-    #[serde(skip)]
-    pub x_next: Vec<[f64; 2]>,
+    /// Strain energy density W (J/m³), apart from `mech` so that the two stress passes,
+    /// which update it, leave `mech` read-only (issue 21: arrays grouped by the pass).
+    pub wden: Vec<f64>,
     /// Shape-function weights of the step in progress, computed once in the P2G pass and
     /// reused by the later passes (which must use the same weights, `algorithm.md` pitfall 2).
     /// Scratch of the step: not in checkpoints.
@@ -88,8 +85,8 @@ pub struct PartsMut<'a> {
     pub stress: &'a mut [[f64; 4]],
     /// Metadata.
     pub cold: &'a mut [Cold],
-    /// End-of-step positions.
-    pub x_next: &'a mut [[f64; 2]],
+    /// Strain energy densities.
+    pub wden: &'a mut [f64],
     /// Field masks (empty without cracks).
     pub fmask: &'a mut [u16],
     /// Displacement gradients (empty without cracks).
@@ -106,7 +103,7 @@ impl<'a> PartsMut<'a> {
             mech: &mut p.mech,
             stress: &mut p.stress,
             cold: &mut p.cold,
-            x_next: &mut p.x_next,
+            wden: &mut p.wden,
             fmask: &mut p.fmask,
             grad_u: &mut p.grad_u,
             wts: &mut p.wts,
@@ -130,7 +127,7 @@ impl<'a> PartsMut<'a> {
             self.mech.len() == n
                 && self.stress.len() == n
                 && self.cold.len() == n
-                && self.x_next.len() == n
+                && self.wden.len() == n
                 && self.wts.len() == n
                 && (self.fmask.is_empty() || self.fmask.len() == n)
                 && (self.grad_u.is_empty() || self.grad_u.len() == n),
@@ -143,7 +140,7 @@ impl<'a> PartsMut<'a> {
         let (m0, m1) = self.mech.split_at_mut(i);
         let (s0, s1) = self.stress.split_at_mut(i);
         let (c0, c1) = self.cold.split_at_mut(i);
-        let (x0, x1) = self.x_next.split_at_mut(i);
+        let (x0, x1) = self.wden.split_at_mut(i);
         let (f0, f1) = if self.fmask.is_empty() {
             (&mut [][..], &mut [][..])
         } else {
@@ -161,7 +158,7 @@ impl<'a> PartsMut<'a> {
                 mech: m0,
                 stress: s0,
                 cold: c0,
-                x_next: x0,
+                wden: x0,
                 fmask: f0,
                 grad_u: g0,
                 wts: w0,
@@ -171,7 +168,7 @@ impl<'a> PartsMut<'a> {
                 mech: m1,
                 stress: s1,
                 cold: c1,
-                x_next: x1,
+                wden: x1,
                 fmask: f1,
                 grad_u: g1,
                 wts: w1,

@@ -273,6 +273,40 @@ mod tests {
             prop_assert!(g[0].abs() < 1e-12 && g[1].abs() < 1e-12);
         }
 
+        // The cached (f32) weights: every S and S' within f32 rounding of the f64 ones
+        // (|Δ| ≤ 2⁻²³ for the outer nodes, two of those for the middle one), the partition of
+        // unity kept to f64 rounding, the empty last node still exactly empty (the passes skip
+        // it on S = 0), for both shape functions.
+        #[test]
+        fn cached_weights_keep_the_partition_of_unity(
+            x in 2.0f64..50.0, y in 2.0f64..50.0, ppc in 1u32..5, gimp in proptest::bool::ANY,
+        ) {
+            let kind = if gimp { ShapeFunction::Gimp } else { ShapeFunction::Linear };
+            let w = Weights2::new(kind, [x, y], 0.5 / ppc as f64);
+            let c = CachedW2::pack(&w).unpack();
+            let (mut s, mut g) = (0.0, [0.0; 2]);
+            for a in 0..3 {
+                for b in 0..3 {
+                    s += c.s(a, b);
+                    g[0] += c.g(a, b)[0];
+                    g[1] += c.g(a, b)[1];
+                }
+            }
+            prop_assert!((s - 1.0).abs() < 1e-12, "sum S = {s}");
+            prop_assert!(g[0].abs() < 1e-12 && g[1].abs() < 1e-12, "sum G = {g:?}");
+            for (e, f) in [(&w.x, &c.x), (&w.y, &c.y)] {
+                prop_assert_eq!(e.base, f.base);
+                for k in 0..3 {
+                    let tol = if k == 1 { 4.0 } else { 2.0 } * f64::from(f32::EPSILON);
+                    prop_assert!((e.s[k] - f.s[k]).abs() <= tol, "S {k}: {} vs {}", e.s[k], f.s[k]);
+                    prop_assert!((e.ds[k] - f.ds[k]).abs() <= 2.0 * tol, "S' {k}");
+                }
+                for k in [0, 2] {
+                    prop_assert_eq!(e.s[k] == 0.0, f.s[k] == 0.0);
+                }
+            }
+        }
+
         // The derivative is the derivative: central differences agree to O(ε²).
         #[test]
         fn gimp_derivative_matches_difference(d in -1.6f64..1.6, ppc in 1u32..5) {

@@ -101,7 +101,7 @@ fn observe(sim: &mut Simulation) -> (String, Vec<u64>) {
         let (k, me, c) = (p.kin[i], p.mech[i], p.cold[i]);
         bits.extend([k.x[0], k.x[1], k.v[0], k.v[1]].map(f64::to_bits));
         bits.extend(p.stress[i].map(f64::to_bits));
-        bits.extend([me.m, me.vol, me.lh, me.w, c.x0[0], c.x0[1]].map(f64::to_bits));
+        bits.extend([me.m, me.vol, me.lh, p.wden[i], c.x0[0], c.x0[1]].map(f64::to_bits));
         bits.extend([me.mat, me.load, c.id, c.body].map(u64::from));
         if let Some(g) = p.grad_u.get(i) {
             bits.extend(g.map(f64::to_bits));

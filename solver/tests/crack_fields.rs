@@ -34,7 +34,6 @@ fn field_of(
         m: 1.0,
         vol: 1.0,
         lh: 0.25,
-        w: 0.0,
         mat: 0,
         load: 0,
     }];

@@ -19,7 +19,7 @@ fn state_bits(sim: &Simulation) -> Vec<u64> {
         let (k, s) = (p.kin[i], p.stress[i]);
         bits.extend([k.x[0], k.x[1], k.v[0], k.v[1]].map(f64::to_bits));
         bits.extend(s.map(f64::to_bits));
-        bits.push(p.mech[i].w.to_bits());
+        bits.push(p.wden[i].to_bits());
     }
     bits
 }

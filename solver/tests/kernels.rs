@@ -28,15 +28,7 @@ fn state(sim: &Simulation) -> Vec<[f64; 9]> {
         .map(|i| {
             let (k, s) = (p.kin[i], p.stress[i]);
             [
-                k.x[0],
-                k.x[1],
-                k.v[0],
-                k.v[1],
-                s[0],
-                s[1],
-                s[2],
-                s[3],
-                p.mech[i].w,
+                k.x[0], k.x[1], k.v[0], k.v[1], s[0], s[1], s[2], s[3], p.wden[i],
             ]
         })
         .collect()

@@ -20,7 +20,7 @@ fn state_bits(sim: &Simulation) -> Vec<u64> {
         let (k, s) = (p.kin[i], p.stress[i]);
         bits.extend([k.x[0], k.x[1], k.v[0], k.v[1]].map(f64::to_bits));
         bits.extend(s.map(f64::to_bits));
-        bits.push(p.mech[i].w.to_bits());
+        bits.push(p.wden[i].to_bits());
         if let Some(g) = p.grad_u.get(i) {
             bits.extend(g.map(f64::to_bits));
         }

@@ -73,8 +73,8 @@ pub struct BenchArgs {
     #[arg(long, value_enum, default_value_t = CaseArg::NoCrack)]
     pub case: CaseArg,
     /// Throughput matrix: also count instructions per particle-step of each case under
-    /// valgrind's cachegrind (one thread, 0.002 m cells; skipped with a note where valgrind
-    /// is not installed).
+    /// valgrind's cachegrind (one thread, 0.002 m cells or --cell-size if coarser; skipped
+    /// with a note where valgrind is not installed).
     #[arg(long)]
     pub instructions: bool,
     /// `ab`: the baseline `fracture` binary (built from the stated baseline commit).

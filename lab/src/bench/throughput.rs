@@ -102,8 +102,8 @@ pub struct Run {
     pub model_gb_per_s: f64,
     /// That over the triad bandwidth on the same thread count.
     pub fraction_of_bandwidth: f64,
-    /// Instructions per particle-step of the case (cachegrind, one thread, 0.002 m cells,
-    /// 20 steps; `--instructions`), where counted.
+    /// Instructions per particle-step of the case (cachegrind, one thread, 0.002 m cells or
+    /// the matrix's if coarser, 20 steps; `--instructions`), where counted.
     pub instructions_per_particle_step: Option<f64>,
 }
 
@@ -149,22 +149,23 @@ impl BytesModel {
         let kin = std::mem::size_of::<Kin>() as f64;
         let mech = std::mem::size_of::<Mech>() as f64;
         let stress = 32.0; // [f64; 4]
-        let xn = 16.0; // x_next [f64; 2]
+        let wden = 8.0; // strain energy density, f64
         let wts = std::mem::size_of::<CachedW2>() as f64;
         let cold = std::mem::size_of::<Cold>() as f64;
         let (mask, grad) = (2.0, 32.0);
-        // P2G: read kin, mech (unless fused into the last strain update, which has them);
-        // write weights.
-        let mut b = 2.0 * wts;
+        // P2G: write weights; read kin, mech (fused into the last strain update, which
+        // reads mech anyway, it adds only kin).
+        let mut b = 2.0 * wts + kin;
         if cracks {
-            b += kin + mech;
+            b += mech;
         }
-        // Forces: read weights, mech (W written: read + write); stress read + written.
-        b += wts + 2.0 * mech + 2.0 * stress;
-        // Update: read weights, mech; kin read + written (v); x_next written.
-        b += wts + mech + 2.0 * kin + 2.0 * xn;
-        // Last strain update: read weights, x_next; stress, mech and kin (x) read + written.
-        b += wts + xn + 2.0 * stress + 2.0 * mech + 2.0 * kin;
+        // Forces: read weights, mech; stress and strain energy density read + written.
+        b += wts + mech + 2.0 * stress + 2.0 * wden;
+        // Update: read weights, mech; kin read + written (v and x).
+        b += wts + mech + 2.0 * kin;
+        // Last strain update: read weights, mech; stress and strain energy density read +
+        // written.
+        b += wts + mech + 2.0 * stress + 2.0 * wden;
         if cracks {
             // Mask written in the field pass and read in the four passes; initial position
             // read in P2G; displacement gradient read + written in both stress updates.
@@ -305,6 +306,8 @@ pub struct Report {
     pub runs: Vec<Run>,
     /// Why instructions were asked for and not counted.
     pub instructions_note: Option<&'static str>,
+    /// Cell size (m) of the instruction counts.
+    pub instructions_cell: f64,
 }
 
 /// Cell size (m) of the instruction counts (31,250 particles: a cachegrind run of seconds).
@@ -324,6 +327,8 @@ pub fn run(o: &Options, out: Option<&Path>) -> anyhow::Result<Report> {
     let mut runs = Vec::new();
     let mut npp = 0.25;
     let mut instructions_note = None;
+    // Cachegrind runs ~50x slower: a coarser matrix is counted at its own cell size.
+    let instructions_cell = o.cell_size.max(INSTRUCTIONS_CELL);
     for case in Case::ALL {
         let instructions = match o.instructions {
             Some(k) => {
@@ -332,7 +337,7 @@ pub fn run(o: &Options, out: Option<&Path>) -> anyhow::Result<Report> {
                     Case::Crack => super::command::CaseArg::Crack,
                     Case::Propagation => super::command::CaseArg::Propagation,
                 };
-                let n = super::ab::instructions_per_particle_step(c, INSTRUCTIONS_CELL, 20, k)?;
+                let n = super::ab::instructions_per_particle_step(c, instructions_cell, 20, k)?;
                 if n.is_none() {
                     instructions_note = Some("valgrind is not installed: no instruction counts");
                 }
@@ -366,6 +371,7 @@ pub fn run(o: &Options, out: Option<&Path>) -> anyhow::Result<Report> {
         kernel: o.kernel.name(),
         runs,
         instructions_note,
+        instructions_cell,
     };
     let md = markdown(&report);
     #[allow(clippy::print_stdout)]
@@ -475,8 +481,9 @@ fn markdown(r: &Report) -> String {
     {
         s.push_str(&format!(
             "\nInstructions per particle-step: valgrind's cachegrind on `fracture bench --case \
-             <case> --threads 1` at {INSTRUCTIONS_CELL} m cells, 21 steps less 1 (set-up and \
-             the first step subtracted); the same for every thread count.\n"
+             <case> --threads 1` at {} m cells, 21 steps less 1 (set-up and the first step \
+             subtracted); the same for every thread count.\n",
+            r.instructions_cell
         ));
     }
     if let Some(n) = r.instructions_note {

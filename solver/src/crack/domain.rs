@@ -170,7 +170,7 @@ impl Cracks {
             let rho = m.m / m.vol;
             let da = m.vol / self.thickness;
             let ke = 0.5 * rho * (k.v[0] * k.v[0] + k.v[1] * k.v[1]);
-            let wke = m.w + ke;
+            let wke = p.wden[i] + ke;
             let sig = [[s[0], s[2]], [s[2], s[1]]];
             // ∂u_i/∂x_k = gu[2i + k].
             let gmat = [[gu[0], gu[1]], [gu[2], gu[3]]];

@@ -104,7 +104,7 @@ impl Cracks {
             let gu = p.grad_u[i];
             let rho = m.m / m.vol;
             let ke = 0.5 * rho * (k.v[0] * k.v[0] + k.v[1] * k.v[1]);
-            let pv = [s[0], s[1], s[2], gu[0], gu[1], gu[2], gu[3], m.w, ke];
+            let pv = [s[0], s[1], s[2], gu[0], gu[1], gu[2], gu[3], p.wden[i], ke];
             let w = Weights2::new(v.shape, pxi, m.lh);
             let mask = if has_mask { p.fmask[i] } else { 0 };
             let inside = pxi[0] > box_lo[0]

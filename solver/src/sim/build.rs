@@ -58,7 +58,6 @@ impl Simulation {
                 m: mats[mat].rho * vol,
                 vol,
                 lh: 0.5 / s.ppc as f64,
-                w: 0.0,
                 mat: mat as u32,
                 load,
             });
@@ -68,7 +67,7 @@ impl Simulation {
                 id,
                 body: s.body,
             });
-            parts.x_next.push(s.x);
+            parts.wden.push(0.0);
             parts.wts.push(crate::shape::CachedW2::default());
             id += 1;
         });
@@ -122,6 +121,7 @@ impl Simulation {
             scratch_kin: vec![Kin::default(); n],
             scratch_mech: vec![Mech::default(); n],
             scratch_stress: vec![[0.0; 4]; n],
+            scratch_wden: vec![0.0; n],
             scratch_cold: vec![Cold::default(); n],
             scratch_grad: if scene.cracks.is_empty() {
                 Vec::new()

@@ -41,7 +41,7 @@ use crate::particles::Particles;
 pub const CHECKPOINT_MAGIC: [u8; 8] = *b"MPMFSIM\0";
 
 /// Version of the checkpoint layout; bumped whenever the persisted state changes shape.
-pub const CHECKPOINT_FORMAT: u32 = 2;
+pub const CHECKPOINT_FORMAT: u32 = 3;
 
 /// Why a checkpoint was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -256,7 +256,6 @@ impl Simulation {
         }
         // Particles, with the step's scratch sized as `new` sizes it.
         let mut parts = st.parts;
-        parts.x_next = parts.kin.iter().map(|k| k.x).collect();
         parts.wts = std::mem::take(&mut sim.parts.wts);
         sim.parts = parts;
         sim.needs_sort = st.needs_sort;

@@ -100,8 +100,8 @@ impl Simulation {
             FAIL_GRID => StepError::LeftGrid {
                 step,
                 particle,
-                x: self.parts.x_next[i][0],
-                y: self.parts.x_next[i][1],
+                x: k.x[0],
+                y: k.x[1],
             },
             _ => StepError::NonFinite {
                 step,

@@ -100,6 +100,7 @@ pub struct Simulation {
     scratch_kin: Vec<Kin>,
     scratch_mech: Vec<Mech>,
     scratch_stress: Vec<[f64; 4]>,
+    scratch_wden: Vec<f64>,
     scratch_cold: Vec<Cold>,
     scratch_grad: Vec<[f64; 4]>,
     col_sums: Vec<f64>,

@@ -48,11 +48,13 @@ impl Simulation {
             self.scratch_kin[d] = p.kin[i];
             self.scratch_mech[d] = p.mech[i];
             self.scratch_stress[d] = p.stress[i];
+            self.scratch_wden[d] = p.wden[i];
             self.scratch_cold[d] = p.cold[i];
         }
         std::mem::swap(&mut p.kin, &mut self.scratch_kin);
         std::mem::swap(&mut p.mech, &mut self.scratch_mech);
         std::mem::swap(&mut p.stress, &mut self.scratch_stress);
+        std::mem::swap(&mut p.wden, &mut self.scratch_wden);
         std::mem::swap(&mut p.cold, &mut self.scratch_cold);
         if !p.grad_u.is_empty() {
             for (i, &d) in self.sort_perm.iter().enumerate() {

@@ -313,7 +313,7 @@ impl Simulation {
                         let l = gather_l::<A>(&mut st);
                         let mat = &mats[mech.mat as usize];
                         let gu = p.grad_u.get_mut(i);
-                        let (stress, w) = (&mut p.stress[i], &mut p.mech[i].w);
+                        let (stress, w) = (&mut p.stress[i], &mut p.wden[i]);
                         if !stress_apply::<A>(mat, stress, w, gu, l, half, inv_h) {
                             first_fail(&mut acc, first + i, FAIL_STRESS);
                         }
@@ -415,7 +415,13 @@ impl Simulation {
                             }
                         }
                         p.kin[i].v = v;
-                        p.x_next[i] = xn;
+                        // The position is committed here: nothing between this pass and the
+                        // last stress update reads it (that pass and the fused P2G use the
+                        // cached weights and, for the P2G, this new position). A non-finite
+                        // one is not written, so the step's error names the last good one.
+                        if xn[0].is_finite() && xn[1].is_finite() {
+                            p.kin[i].x = xn;
+                        }
                         acc.e += 0.5 * mech.m * (v[0] * v[0] + v[1] * v[1]);
                         if mech.load > 0 {
                             let t = loads[mech.load as usize - 1];
@@ -507,7 +513,7 @@ impl Simulation {
                         stress_apply::<A>(
                             mat,
                             &mut p.stress[i],
-                            &mut p.mech[i].w,
+                            &mut p.wden[i],
                             None,
                             l,
                             half,
@@ -517,8 +523,7 @@ impl Simulation {
                     if !ok {
                         first_fail(&mut acc, first + i, FAIL_STRESS);
                     }
-                    acc.e += mech.vol * p.mech[i].w;
-                    p.kin[i].x = p.x_next[i];
+                    acc.e += mech.vol * p.wden[i];
                     p2g_particle::<A>(
                         &cx,
                         &mut p,
@@ -599,22 +604,12 @@ impl Simulation {
                         let l = gather_l::<A>(&mut st);
                         let mat = &mats[mech.mat as usize];
                         let gu = p.grad_u.get_mut(i);
-                        stress_apply::<A>(
-                            mat,
-                            &mut p.stress[i],
-                            &mut p.mech[i].w,
-                            gu,
-                            l,
-                            half,
-                            inv_h,
-                        )
+                        stress_apply::<A>(mat, &mut p.stress[i], &mut p.wden[i], gu, l, half, inv_h)
                     });
                     if !ok {
                         first_fail(&mut acc, first + i, FAIL_STRESS);
                     }
-                    let wnew = p.mech[i].w;
-                    acc.e += mech.vol * wnew;
-                    p.kin[i].x = p.x_next[i];
+                    acc.e += mech.vol * p.wden[i];
                 }
                 acc
             })
