@@ -488,115 +488,53 @@ fn bench_accuracy_tiny_ladder_writes_its_files() {
     assert!(stdout(&o).contains("order p"));
 }
 
-/// `bench skip` and the throughput matrix run CI-sized and write their files.
+/// Arguments of a CI-sized benchmark: the seed block at 5 mm cells, 2 steps after 1, 1 thread.
+const SMALL_BENCH: [&str; 8] = [
+    "--cell-size",
+    "0.005",
+    "--steps",
+    "2",
+    "--warmup",
+    "1",
+    "--threads",
+    "1",
+];
+
+/// Run `fracture <args> --out <dir>/<name> SMALL_BENCH`, expect success and read the JSON
+/// report `<name>.json` it wrote.
+fn small_bench(args: &[&str], dir: &std::path::Path, name: &str) -> Value {
+    let out = dir.join(name);
+    let mut all = args.to_vec();
+    all.extend(["--out", out.to_str().unwrap()]);
+    all.extend(SMALL_BENCH);
+    let o = fracture(&all);
+    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
+    serde_json::from_str(&std::fs::read_to_string(out.join(format!("{name}.json"))).unwrap())
+        .unwrap()
+}
+
+/// `bench skip` and the throughput matrix (with instruction counts) run CI-sized and write
+/// their files.
 #[test]
 fn bench_skip_and_throughput_matrix_run_ci_sized() {
     let dir = tempfile::tempdir().unwrap();
-    let small = [
-        "--cell-size",
-        "0.005",
-        "--steps",
-        "2",
-        "--warmup",
-        "1",
-        "--threads",
-        "1",
-    ];
-    let out = dir.path().join("skip");
-    let mut args = vec!["bench", "skip", "--out", out.to_str().unwrap()];
-    args.extend(small);
-    let o = fracture(&args);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let v: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("skip.json")).unwrap()).unwrap();
+    let v = small_bench(&["bench", "skip"], dir.path(), "skip");
     let figs = v["figures"].as_array().unwrap();
     // Without a crack no crack phase runs and no J is evaluated.
     assert_eq!(figs[0]["counters"], json!([0, 0, 0, 0, 0]));
-    let out = dir.path().join("tp");
-    let mut args = vec![
-        "bench",
-        "throughput",
-        "--thread-counts",
-        "1",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend(small);
-    let o = fracture(&args);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let v: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("throughput.json")).unwrap())
-            .unwrap();
-    assert_eq!(v["runs"].as_array().unwrap().len(), 3);
-    assert!(out.join("throughput.csv").is_file());
-}
-
-/// `bench ab` runs interleaved pairs against a baseline binary (here this one) and reports
-/// both medians; without `--baseline` it names the missing option. `bench throughput
-/// --instructions` counts instructions per particle-step where valgrind is installed (a
-/// plausible count: the step is ~1,000 instructions per particle) and says so where not.
-#[test]
-fn bench_ab_and_instruction_counts_run_ci_sized() {
-    let dir = tempfile::tempdir().unwrap();
-    let small = [
-        "--cell-size",
-        "0.005",
-        "--steps",
-        "2",
-        "--warmup",
-        "1",
-        "--threads",
-        "1",
-    ];
-    let out = dir.path().join("ab");
-    let mut args = vec![
-        "bench",
-        "ab",
-        "--baseline",
-        env!("CARGO_BIN_EXE_fracture"),
-        "--pairs",
-        "2",
-        "--out",
-        out.to_str().unwrap(),
-    ];
-    args.extend(small);
-    let o = fracture(&args);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let v: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("ab.json")).unwrap()).unwrap();
-    assert_eq!(v["samples"].as_array().unwrap().len(), 4);
-    let sides: Vec<&str> = v["samples"]
-        .as_array()
-        .unwrap()
-        .iter()
-        .map(|s| s["side"].as_str().unwrap())
-        .collect();
-    assert_eq!(
-        sides,
-        ["baseline", "this", "this", "baseline"],
-        "interleaved"
-    );
-    assert!(v["ratio_of_medians"].as_f64().unwrap() > 0.0);
-    let o = fracture(&["bench", "ab", "--pairs", "1"]);
-    assert_ne!(o.status.code(), Some(0));
-    assert!(stderr(&o).contains("--baseline"), "{}", stderr(&o));
-
-    let out = dir.path().join("tp");
-    let mut args = vec![
+    let args = [
         "bench",
         "throughput",
         "--instructions",
         "--thread-counts",
         "1",
-        "--out",
-        out.to_str().unwrap(),
     ];
-    args.extend(small);
-    let o = fracture(&args);
-    assert_eq!(o.status.code(), Some(0), "{}", stderr(&o));
-    let v: Value =
-        serde_json::from_str(&std::fs::read_to_string(out.join("throughput.json")).unwrap())
-            .unwrap();
+    let v = small_bench(&args, dir.path(), "throughput");
+    let out = dir.path().join("throughput");
+    assert_eq!(v["runs"].as_array().unwrap().len(), 3);
+    assert!(out.join("throughput.csv").is_file());
+    // Instructions per particle-step where valgrind is installed (the step is ~1,000 per
+    // particle), a note where not.
     let has_valgrind = std::process::Command::new("valgrind")
         .arg("--version")
         .output()
@@ -617,6 +555,35 @@ fn bench_ab_and_instruction_counts_run_ci_sized() {
         let md = std::fs::read_to_string(out.join("throughput.md")).unwrap();
         assert!(md.contains("valgrind is not installed"), "{md}");
     }
+}
+
+/// `bench ab` runs interleaved pairs against a baseline binary (here this one) and reports
+/// both medians; without `--baseline` it names the missing option.
+#[test]
+fn bench_ab_runs_ci_sized() {
+    let dir = tempfile::tempdir().unwrap();
+    let me = env!("CARGO_BIN_EXE_fracture");
+    let v = small_bench(
+        &["bench", "ab", "--baseline", me, "--pairs", "2"],
+        dir.path(),
+        "ab",
+    );
+    assert_eq!(v["samples"].as_array().unwrap().len(), 4);
+    let sides: Vec<&str> = v["samples"]
+        .as_array()
+        .unwrap()
+        .iter()
+        .map(|s| s["side"].as_str().unwrap())
+        .collect();
+    assert_eq!(
+        sides,
+        ["baseline", "this", "this", "baseline"],
+        "interleaved"
+    );
+    assert!(v["ratio_of_medians"].as_f64().unwrap() > 0.0);
+    let o = fracture(&["bench", "ab", "--pairs", "1"]);
+    assert_ne!(o.status.code(), Some(0));
+    assert!(stderr(&o).contains("--baseline"), "{}", stderr(&o));
 }
 
 #[test]
