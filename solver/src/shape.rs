@@ -168,18 +168,15 @@ impl Weights2 {
     }
 }
 
-/// Storage type of the cached outer weights (`CachedW2`).
-pub type WeightFloat = f32;
-
 /// One direction of [`CachedW2`]: the stencil base and the outer two nodes' S and dS/dξ.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct CachedW1 {
     /// Index of the first node.
     pub base: i32,
     /// S of the first and last node.
-    pub s: [WeightFloat; 2],
+    pub s: [f32; 2],
     /// dS/dξ of the first and last node.
-    pub ds: [WeightFloat; 2],
+    pub ds: [f32; 2],
 }
 
 /// The shape-function weights a particle's P2G caches for the step's later passes
@@ -200,8 +197,8 @@ impl CachedW1 {
     fn pack(w: &Weights1) -> CachedW1 {
         CachedW1 {
             base: w.base,
-            s: [w.s[0] as WeightFloat, w.s[2] as WeightFloat],
-            ds: [w.ds[0] as WeightFloat, w.ds[2] as WeightFloat],
+            s: [w.s[0] as f32, w.s[2] as f32],
+            ds: [w.ds[0] as f32, w.ds[2] as f32],
         }
     }
     #[inline(always)]

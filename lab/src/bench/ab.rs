@@ -73,31 +73,30 @@ fn common_args(a: &BenchArgs) -> Vec<String> {
     ]
 }
 
-/// The arguments this build adds: the case (where not the default) and the kernel.
-fn own_args(a: &BenchArgs, kernel: KernelArg, case: CaseArg) -> Vec<String> {
-    let mut v = Vec::new();
-    if case != CaseArg::NoCrack {
-        v.push("--case".into());
-        v.push(
-            match case {
-                CaseArg::NoCrack => "no-crack",
-                CaseArg::Crack => "crack",
-                CaseArg::Propagation => "propagation",
-            }
-            .into(),
-        );
-        v.push("--history-every".into());
-        v.push(a.history_every.to_string());
+/// The name clap gives a value of `--case` or `--kernel` on the command line.
+fn arg_name(v: impl clap::ValueEnum) -> String {
+    v.to_possible_value()
+        .map_or_else(String::new, |p| p.get_name().to_string())
+}
+
+/// `--case` (where not the default) and its `--history-every`: what a baseline that knows
+/// `--case` must get too.
+fn case_args(a: &BenchArgs, case: CaseArg) -> Vec<String> {
+    if case == CaseArg::NoCrack {
+        return Vec::new();
     }
-    v.push("--kernel".into());
-    v.push(
-        match kernel {
-            KernelArg::Auto => "auto",
-            KernelArg::Portable => "portable",
-            KernelArg::Fma => "fma",
-        }
-        .into(),
-    );
+    vec![
+        "--case".into(),
+        arg_name(case),
+        "--history-every".into(),
+        a.history_every.to_string(),
+    ]
+}
+
+/// The case arguments and `--kernel`: what this build adds to the common ones.
+fn own_args(a: &BenchArgs, kernel: KernelArg, case: CaseArg) -> Vec<String> {
+    let mut v = case_args(a, case);
+    v.extend(["--kernel".into(), arg_name(kernel)]);
     v
 }
 
@@ -144,11 +143,9 @@ pub fn run(baseline: &Path, a: &BenchArgs, out: Option<&Path>) -> anyhow::Result
     let common = common_args(a);
     let mut this_args = common.clone();
     this_args.extend(own_args(a, a.kernel, a.case));
+    // An older baseline may not know --case: it then fails with its own message.
     let mut base_args = common.clone();
-    if a.case != CaseArg::NoCrack {
-        // An older baseline may not know --case: it fails with its own message.
-        base_args.extend(own_args(a, KernelArg::Auto, a.case).into_iter().take(4));
-    }
+    base_args.extend(case_args(a, a.case));
     let mut samples = Vec::new();
     let mut ratios = Vec::new();
     for pair in 1..=a.pairs {

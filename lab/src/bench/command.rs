@@ -134,6 +134,15 @@ impl CaseArg {
             CaseArg::Propagation => Case::Propagation,
         }
     }
+    /// The argument of the matrix's case `c`.
+    pub fn of(c: crate::bench::throughput::Case) -> CaseArg {
+        use crate::bench::throughput::Case;
+        match c {
+            Case::NoCrack => CaseArg::NoCrack,
+            Case::Crack => CaseArg::Crack,
+            Case::Propagation => CaseArg::Propagation,
+        }
+    }
 }
 
 /// `--kernel`.

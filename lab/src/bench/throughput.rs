@@ -332,11 +332,7 @@ pub fn run(o: &Options, out: Option<&Path>) -> anyhow::Result<Report> {
     for case in Case::ALL {
         let instructions = match o.instructions {
             Some(k) => {
-                let c = match case {
-                    Case::NoCrack => super::command::CaseArg::NoCrack,
-                    Case::Crack => super::command::CaseArg::Crack,
-                    Case::Propagation => super::command::CaseArg::Propagation,
-                };
+                let c = super::command::CaseArg::of(case);
                 let n = super::ab::instructions_per_particle_step(c, instructions_cell, 20, k)?;
                 if n.is_none() {
                     instructions_note = Some("valgrind is not installed: no instruction counts");
