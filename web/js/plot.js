@@ -663,11 +663,13 @@ export class Plot {
       const d = drag;
       drag = null;
       if (host.hasPointerCapture(d.id)) host.releasePointerCapture(d.id);
+      let changed = d.pan || Math.abs(px - d.px) > 3;
       if (!d.pan && this.L) {
         const r = dragRange(d.px, px, { left: this.M.left, width: this.L.pw, x0: this.L.x0, x1: this.L.x1 });
-        if (r && r[1] > r[0]) this.zoom = r;
+        if (r && r[1] > r[0]) { this.zoom = r; changed = true; }
       }
-      this.update();
+      // a plain click changes nothing: no redraw between the two clicks of a double click
+      if (changed) this.update();
     };
     host.addEventListener('pointerup', end);
     host.addEventListener('pointercancel', () => { drag = null; this.update(); });
