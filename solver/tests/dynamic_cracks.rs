@@ -54,20 +54,17 @@ fn freund_step_wave() {
 
 /// Stable growth against beam theory: a double cantilever beam (arms H = 5 mm thick, initial
 /// crack 20 mm, Homalite, plane strain) opened slowly at its end (0.2 m/s per arm, light
-/// viscous damping) grows under displacement control by the equation of motion. Beam theory
-/// with the root rotation of the arms (Kanninen 1973: each arm a cantilever built in at an
-/// effective a + χH, χ ≈ 0.64) gives G = 3E'H³Δ²/(16(a + χH)⁴) for a total opening Δ, so a
-/// crack that grows at G = Γ has a = (3E'H³Δ²/(16Γ))^¼ − χH. Once it has grown 2h, the crack
-/// length (tip to load line) at every sample stays within 8 % of that, and the crack grows by
-/// more than 4h. 0.5 mm cells (10 per arm), 2×2 particles per cell.
-///
-/// NOT YET MET (issue 16 open): both growth laws end at a ≈ 30–31 mm where this beam theory
-/// says 23.8 mm (27.0 without the root rotation). The run is not quasi-static: an arm's first
-/// flexural period is about 240 µs against 500 µs of loading, so the arms overshoot; a slow
-/// enough opening costs minutes, more than a test may take. Run with `--ignored`
-/// (`SPEED=wave` for the seed's rule).
+/// viscous damping) grows under displacement control by the equation of motion. Each arm is
+/// pulled by one column of nodes at the end (a pin: the arm's end is free to rotate; a
+/// gripped strip several nodes wide clamps the rotation and doubles J at a given opening).
+/// Beam theory with the root rotation of the arms (Kanninen 1973: each arm a cantilever built
+/// in at an effective a + χH, χ ≈ 0.64) gives G = 3E'H³Δ²/(16(a + χH)⁴) for a total opening
+/// Δ, so a crack that grows at G = Γ has a = (3E'H³Δ²/(16Γ))^¼ − χH. Once it has grown 2h,
+/// the crack length (tip to load line) at every sample stays within 8 % of that, and the
+/// crack grows by more than 4h. 0.5 mm cells (10 per arm), 2×2 particles per cell.
+/// Measured: the law before this one (G* = G_f/g(v) at the current speed) ran 4 mm past
+/// beam theory in one burst (+17 %), the seed's `wave` rule ends 16 % long (`SPEED=wave`).
 #[test]
-#[ignore = "not quasi-static at a test's cost: 30 mm vs 23.8 mm (issue 16 open)"]
 fn dcb_crack_length_follows_beam_theory() {
     let h = 0.0005;
     let m = 2.0 * h;
@@ -84,8 +81,8 @@ fn dcb_crack_length_follows_beam_theory() {
         "cracks": [{"points": [[m - 0.5 * h, yc], [m + a0, yc]],
                     "propagation": {"criterion": "energy_release", "toughness": gc, "direction": {"fixed": [1.0, 0.0]}, "speed": std::env::var("SPEED").unwrap_or("equation_of_motion".into())}}],
         "boundary_conditions": [
-            {"region": {"rectangle": {"min": [0.0, yc + 2.0 * h], "max": [m + 2.0 * h, 1.0]}}, "velocity": {"y": vel}, "ramp_time": ramp},
-            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [m + 2.0 * h, yc - 2.0 * h]}}, "velocity": {"y": -vel}, "ramp_time": ramp}
+            {"region": {"rectangle": {"min": [m - 0.25 * h, yc + 2.0 * h], "max": [m + 0.25 * h, 1.0]}}, "velocity": {"y": vel}, "ramp_time": ramp},
+            {"region": {"rectangle": {"min": [m - 0.25 * h, 0.0], "max": [m + 0.25 * h, yc - 2.0 * h]}}, "velocity": {"y": -vel}, "ramp_time": ramp}
         ],
         "damping": {"kind": "viscous", "coefficient": 1.0e4},
         "time": {"end": 5.0e-4, "cfl": 0.5}
@@ -93,8 +90,8 @@ fn dcb_crack_length_follows_beam_theory() {
     let mat = &s.materials["m"];
     let (e, nu) = (mat.youngs_modulus(), mat.poissons_ratio());
     let e_prime = e / (1.0 - nu * nu);
-    // Load line: the middle of the gripped 2h strip of nodes at the end.
-    let load_x = m + 0.5 * h;
+    // Load line: the pulled column of nodes, the body's end.
+    let load_x = m;
     let chi = 0.64;
     let mut sim = sim(&s, 0);
     let mut worst: f64 = 0.0;

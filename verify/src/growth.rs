@@ -111,6 +111,7 @@ pub fn run_kink(
     let mut sim = Simulation::new(&fracture_api::ValidScene::new(scene.clone())?, config)?;
     let no_crack = || VerifyError::NotMeasurable("no crack".into());
     let start = sim.cracks().ok_or_else(no_crack)?.cracks[0].clone();
+    let h = scene.grid.cell_size;
     let mut angles = [f64::NAN; 2];
     let angle_in = |frame: ([f64; 2], [f64; 2]), x: [f64; 2]| {
         let (tip, e1) = frame;
@@ -127,7 +128,7 @@ pub fn run_kink(
         if first {
             for (t, angle) in angles.iter_mut().enumerate() {
                 if angle.is_nan() && before.tips[t].active && c.tips[t].advance > 0.0 {
-                    *angle = angle_in(before.tip_frame(t), c.tip_frame(t).0);
+                    *angle = angle_in(before.tip_frame(t, h), c.tip_frame(t, h).0);
                 }
             }
             let wanted = (0..2).filter(|&t| start.tips[t].active).count();
@@ -136,7 +137,7 @@ pub fn run_kink(
                 break;
             }
         } else if c.tips[1].advance >= 0.005 {
-            angles[0] = angle_in(start.tip_frame(1), c.tip_frame(1).0);
+            angles[0] = angle_in(start.tip_frame(1, h), c.tip_frame(1, h).0);
             break;
         }
     }

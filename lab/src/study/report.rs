@@ -393,8 +393,9 @@ impl Report<'_> {
             md,
             "## Two growth laws\n\n\
              - **Equation of motion** (`\"speed\": \"equation_of_motion\"`, the product's default): the tip moves \
-             v·Δt per step at the speed where the dynamic energy release rate g(v)·G, G the J1 of the domain \
-             integral filtered over `filter_time`, equals the toughness; a process zone behind the tip dissipates the \
+             v·Δt per step, the speed relaxing (over `filter_time`) to where the dynamic energy release rate, the J1 \
+             of the domain integral filtered over `filter_time`, equals the toughness Γ(v) (Freund's g(v)·G* = Γ(v) in \
+             steady state); a process zone behind the tip dissipates the \
              fracture energy Γ per unit new area (`docs/scene-extensions.md`). For a tip-only law g(v) → 0 as v → c_R, \
              so its cracks run below c_R.\n\
              - **The seed's wave rule** (`\"speed\": \"wave\"`): while J ≥ J_Ic a tip jumps c_L·Δt per step; its speed is c_L \
@@ -491,7 +492,7 @@ impl Report<'_> {
              and the seed's loading may differ in the pulse shape and in what the edge does after the pulse.\n\
              - Growth law: the seed's rule moves a growing tip at c_L and relies on the box average, so its speed \
              is the fraction of growing steps times c_L, set by the J contour and the grid. The equation of motion \
-             sets the speed from g(v)·G = Γ. Neither models the experiment's intersonic transition, which runs \
+             sets the speed from the balance G = Γ(v) of the measured dynamic G. Neither models the experiment's intersonic transition, which runs \
              through a daughter crack nucleated ahead of the tip on the bond (the Burridge–Andrews mechanism): that \
              needs a cohesive interface along the bond (issue 17), not a tip law.\n",
             self.wall_label(),

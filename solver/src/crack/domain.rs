@@ -95,7 +95,7 @@ impl Cracks {
         let g = v.geom;
         let h = g.h;
         let c = &self.cracks[ci];
-        let (tip, e1) = c.tip_frame(t);
+        let (tip, e1) = c.tip_frame(t, h);
         let e2 = [-e1[1], e1[0]];
         let r_max = radii.iter().fold(0.0_f64, |a, &b| a.max(b));
         let nan = [f64::NAN; 2];

@@ -63,7 +63,7 @@ impl Cracks {
         let g = v.geom;
         let h = g.h;
         let c = &self.cracks[ci];
-        let (tip, _) = c.tip_frame(t);
+        let (tip, _) = c.tip_frame(t, h);
         let n = match c.j_method {
             JIntegral::Contour { cells } => i64::from(cells.max(1)),
             JIntegral::Domain { radius } => (radius / h).round().max(1.0) as i64,
@@ -203,7 +203,7 @@ impl Cracks {
 
     /// Evaluate tip `t` of crack `ci` now (uncached).
     fn evaluate(&self, ci: usize, t: usize, v: &View<'_>) -> TipEval {
-        let (tip, _) = self.cracks[ci].tip_frame(t);
+        let (tip, _) = self.cracks[ci].tip_frame(t, self.h);
         let medium = self.medium(v, tip);
         let h = self.h;
         let (radius, contour) = match self.cracks[ci].j_method {
@@ -256,7 +256,7 @@ impl Cracks {
         time: f64,
     ) -> TipFrameJ {
         let e = self.tip_eval(ci, t, v, time);
-        let (tip, e1) = self.cracks[ci].tip_frame(t);
+        let (tip, e1) = self.cracks[ci].tip_frame(t, self.h);
         let e2 = [-e1[1], e1[0]];
         let frame = |j: [f64; 2]| [j[0] * e1[0] + j[1] * e1[1], j[0] * e2[0] + j[1] * e2[1]];
         let [j1, j2] = frame(e.j);
@@ -279,7 +279,7 @@ impl Cracks {
     /// Opening (δ_n, δ_t) in the tip frame, about 2h behind tip `t`: left face − right face.
     fn tip_opening(&self, ci: usize, t: usize) -> [f64; 2] {
         let c = &self.cracks[ci];
-        let (_, e1) = c.tip_frame(t);
+        let (_, e1) = c.tip_frame(t, self.h);
         let e2 = [-e1[1], e1[0]];
         let n = c.pts.len();
         let order: Box<dyn Iterator<Item = usize>> = if t == 0 {

@@ -234,14 +234,28 @@ impl Crack {
         geometry::seg_normal(self.pts[lo].x, self.pts[hi].x)
     }
 
-    /// Tip position and outward unit direction e1 of tip `t`.
-    pub fn tip_frame(&self, t: usize) -> ([f64; 2], [f64; 2]) {
+    /// Tip position and outward unit direction e1 of tip `t`: along the chord from the first
+    /// point at least h/2 behind the tip (the other end if none is). A growing tip's last
+    /// segment starts at zero length and its end point is placed by the interpolated
+    /// displacement (`propagation.rs`), so its own direction is noise until it is h/2 long;
+    /// a direction from it once turned a tip backwards (J1 = −G at a DCB's first step).
+    pub fn tip_frame(&self, t: usize, h: f64) -> ([f64; 2], [f64; 2]) {
         let n = self.pts.len();
-        let (tip, prev) = if t == 0 {
-            (self.pts[0].x, self.pts[1].x)
-        } else {
-            (self.pts[n - 1].x, self.pts[n - 2].x)
+        let at = |i: usize| {
+            if t == 0 {
+                self.pts[i].x
+            } else {
+                self.pts[n - 1 - i].x
+            }
         };
+        let tip = at(0);
+        let mut prev = at(1);
+        for i in 1..n {
+            prev = at(i);
+            if geometry::dist(prev, tip) >= 0.5 * h {
+                break;
+            }
+        }
         let d = sub(tip, prev);
         let l = norm(d).max(1e-300);
         (tip, [d[0] / l, d[1] / l])

@@ -8,12 +8,12 @@
 //! * `wave`, the seed's: while G ≥ Γ the tip jumps cfl·h = c_L·Δt in that step; the new
 //!   faces are released at once (no fracture energy is dissipated: the summary reports it).
 //! * `equation_of_motion`: G is filtered, G_f += (1 − e^{−Δt/τ})(G − G_f), so a one-step
-//!   transient after an advance neither starts nor stops the tip; the static energy release
-//!   rate of the moment is G* = G_f/g(v) with v the speed of the last step and Freund's
-//!   g(v) = 1 − v/c_R (the mode I approximation, used for the mode II branch below c_R too);
-//!   the new speed is the smallest root of g(v)·G* = Γ(v) on [0, c_R) (none when
-//!   G* < Γ(0): the tip rests or arrests), and the tip moves v·Δt. Each point the tip leaves
-//!   behind carries a process-zone traction (`zone.rs`) that dissipates Γ per unit area.
+//!   transient after an advance neither starts nor stops the tip; the speed relaxes on the
+//!   balance of the measured dynamic energy release rate and the toughness,
+//!   dv/dt = (c_R/τ)(G_f − Γ(v))/Γ(v) (`eom_speed`), whose steady state is Freund's
+//!   g(v)·G* = Γ(v) below c_R; a resting tip starts once G_f ≥ Γ(0) and arrests when v
+//!   falls to 0; the tip moves v·Δt. Each point the tip leaves behind carries a
+//!   process-zone traction (`zone.rs`) that dissipates Γ per unit area.
 
 use fracture_api::scene::{GrowthDirection, GrowthSpeed, JIntegral, Propagation, Toughness};
 
@@ -24,39 +24,36 @@ use super::j_integral::TipFrameJ;
 use super::zone::Zone;
 use super::{CrackPoint, Cracks, TipState, View, mass_weighted_at};
 
-/// The equation of motion's speed: the smallest root on [0, c_R) of g(v)·G* = Γ(v), with
-/// G* = G_f/g(v_prev) and g(v) = 1 − v/c_R; 0 when G* < Γ(0) or nothing is finite.
-pub(crate) fn eom_speed(g_filtered: f64, v_prev: f64, c_r: f64, toughness: &Toughness) -> f64 {
-    if !(g_filtered.is_finite() && c_r.is_finite() && c_r > 0.0) {
+/// The equation of motion's speed after a step Δt: v relaxes on the measured balance,
+/// dv/dt = (c_R/τ)·(G_f − Γ(v))/Γ(v), from rest only once G_f ≥ Γ(0), kept in [0, c_R).
+///
+/// G_f is the dynamic energy release rate measured at the running tip, Freund's g(v)·G*,
+/// so the steady state is his equation of motion g(v)·G* = Γ(v), and it is stable: a faster
+/// tip measures a smaller G (g′ < 0). Inverting G* = G_f/g(v) with the current v instead
+/// (this law before) is not: G_f reaches the ring a wave travel time late, and the map
+/// v ← c_R·(1 − Γ·g(v)/G_f) has only rest and c_R as attractors, so a double cantilever
+/// beam under slow opening ran 4 mm past beam theory in one burst.
+pub(crate) fn eom_speed(
+    g_filtered: f64,
+    v_prev: f64,
+    c_r: f64,
+    toughness: &Toughness,
+    dt: f64,
+    tau: f64,
+) -> f64 {
+    let v_max = (1.0 - 1e-3) * c_r;
+    if !(g_filtered.is_finite() && c_r.is_finite() && c_r > 0.0 && tau > 0.0) {
         return 0.0;
     }
-    let g = |v: f64| (1.0 - v / c_r).max(0.0);
-    let g_star = g_filtered / g(v_prev.clamp(0.0, 0.999 * c_r));
-    let f = |v: f64| g(v) * g_star - toughness.at(v);
-    let f0 = f(0.0);
-    if f0.is_nan() || f0 <= 0.0 {
+    let v = v_prev.clamp(0.0, v_max);
+    if v <= 0.0 && g_filtered < toughness.at_rest() {
         return 0.0;
     }
-    // Scan for the first sign change (a table Γ(v) may cross more than once), then bisect.
-    let n = 64;
-    let (mut lo, mut hi) = (0.0, c_r);
-    for i in 1..=n {
-        let v = c_r * f64::from(i) / f64::from(n);
-        if f(v) <= 0.0 {
-            hi = v;
-            lo = c_r * f64::from(i - 1) / f64::from(n);
-            break;
-        }
+    let gamma = toughness.at(v);
+    if !(gamma.is_finite() && gamma > 0.0) {
+        return 0.0;
     }
-    for _ in 0..60 {
-        let mid = 0.5 * (lo + hi);
-        if f(mid) > 0.0 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    0.5 * (lo + hi)
+    (v + dt / tau * c_r * (g_filtered - gamma) / gamma).clamp(0.0, v_max)
 }
 
 /// The material displacement at x: the field-0 nodal displacement Σ S m (x_p − X_p) over the
@@ -232,6 +229,8 @@ impl Cracks {
                             tip_state.eom_speed,
                             tf.medium.c_r,
                             &toughness,
+                            dt,
+                            tau,
                         );
                         tip_state.eom_speed = speed;
                         if speed <= 0.0 {
