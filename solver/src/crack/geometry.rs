@@ -24,6 +24,13 @@ pub(super) fn left(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> bool {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) >= 0.0
 }
 
+/// [`left`] with the direction d = b − a computed once (`sub(b, a)`): the same operations on
+/// the same values, so the same answer to the bit.
+#[inline(always)]
+pub(super) fn left_d(a: [f64; 2], d: [f64; 2], c: [f64; 2]) -> bool {
+    d[0] * (c[1] - a[1]) - d[1] * (c[0] - a[0]) >= 0.0
+}
+
 /// Whether segment p → q crosses crack segment a → b (tie rule: on-line counts as left).
 #[inline(always)]
 pub fn crosses(p: [f64; 2], q: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
