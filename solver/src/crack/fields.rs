@@ -45,11 +45,14 @@ struct NearSeg {
 
 impl Cracks {
     /// Field masks of the particles `kin`/`mech` into `fmask`, and the field-1 entries
-    /// (node, crack, side vote, crossed-segment normal) in particle order.
+    /// (node, crack, side vote, crossed-segment normal) in particle order. `seg_box`: the box
+    /// of the cells holding a segment (`build_broad_phase`).
+    #[allow(clippy::too_many_arguments)]
     fn masks(
         &self,
         geom: &GridGeom,
         shape: ShapeFunction,
+        seg_box: Option<[f64; 4]>,
         kin: &[Kin],
         mech: &[Mech],
         fmask: &mut [u16],
@@ -58,6 +61,16 @@ impl Cracks {
         let cell = self.h;
         let mut near: Vec<NearSeg> = Vec::new();
         for (i, (k, m)) in kin.iter().zip(mech).enumerate() {
+            // Most particles lie outside the box of cells holding a segment, where
+            // `segs_near` finds none (a NaN ξ is not outside and takes the full look-up).
+            let xi = geom.xi(k.x);
+            let outside = seg_box
+                .is_none_or(|b| xi[0] < b[0] || xi[0] >= b[1] || xi[1] < b[2] || xi[1] >= b[3]);
+            if outside {
+                debug_assert!(self.segs_near(geom, k.x).is_empty());
+                fmask[i] = 0;
+                continue;
+            }
             let segs = self.segs_near(geom, k.x);
             if segs.is_empty() {
                 fmask[i] = 0;
@@ -149,7 +162,7 @@ impl Cracks {
         fmask: &mut [u16],
         f1_index: &mut Vec<u32>,
     ) -> Result<(), (usize, u32)> {
-        self.build_broad_phase(geom);
+        let seg_box = self.build_broad_phase(geom);
         // Masks and field-1 entries per chunk of particles, in parallel; the chunks' entries
         // are concatenated in particle order, so the result is the same for any thread count.
         const CHUNK: usize = 4096;
@@ -164,7 +177,7 @@ impl Cracks {
             .for_each(|(((fm, kn), me), (entries, err))| {
                 entries.clear();
                 *err = None;
-                if let Err(e) = this.masks(geom, shape, kn, me, fm, entries) {
+                if let Err(e) = this.masks(geom, shape, seg_box, kn, me, fm, entries) {
                     *err = Some(e);
                 }
             });
