@@ -1,5 +1,5 @@
 //! Steps the seed block at a chosen cell size, for profilers (callgrind, perf):
-//! `cargo run --release -p fracture-solver --example profile_step -- 0.002 20 [crack]`.
+//! `cargo run --release -p fracture-solver --example profile_step -- 0.002 20 [crack] [fma]`.
 #![allow(clippy::unwrap_used, clippy::print_stdout, missing_docs)]
 
 use fracture_solver::{Simulation, SolverConfig};
@@ -11,6 +11,8 @@ fn main() {
     let crack = args.iter().skip(3).any(|a| a == "crack");
     // `portable`: the portable kernel (bitwise the solver before the FMA dispatch).
     let portable = args.iter().skip(3).any(|a| a == "portable");
+    // `fma`: the FMA kernel (what `fracture bench --kernel fma` runs), where the CPU has it.
+    let fma = args.iter().skip(3).any(|a| a == "fma");
     let m = 4.0 * cell;
     let mut v = serde_json::json!({
         "grid": {"cell_size": cell, "min": [0.0, 0.0], "max": [0.125 + 2.0 * m, 0.25 + 2.0 * m]},
@@ -30,6 +32,9 @@ fn main() {
     .unwrap();
     if portable {
         sim.set_kernel(fracture_solver::kernel::Kernel::Portable);
+    }
+    if fma {
+        sim.set_kernel(fracture_solver::kernel::Kernel::Fma);
     }
     sim.step().unwrap();
     let t = std::time::Instant::now();

@@ -131,12 +131,19 @@ impl Cracks {
 
         let mut j = [[0.0_f64; 2]; 3];
         let mut m_int = [0.0_f64; 2];
+        // Particles up to 2h beyond the ring feed the face term's nodal gradients.
+        let r_feed = r_max + 2.0 * h;
+        // hypot(d) ≥ max(|d₀|, |d₁|) up to libm's error (under an ulp, far inside the 1e-9
+        // margin): a particle this far along either axis fails `r < r_feed` without the call.
+        let r_box = r_feed * (1.0 + 1e-9);
         for i in range {
             let k = p.kin[i];
             let d = [k.x[0] - tip[0], k.x[1] - tip[1]];
+            if d[0].abs().max(d[1].abs()) > r_box {
+                continue;
+            }
             let r = d[0].hypot(d[1]);
-            // Particles up to 2h beyond the ring feed the face term's nodal gradients.
-            if r >= r_max + 2.0 * h || r <= 0.0 {
+            if r >= r_feed || r <= 0.0 {
                 continue;
             }
             let m = p.mech[i];

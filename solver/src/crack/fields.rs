@@ -11,7 +11,7 @@ use crate::particles::{Kin, Mech};
 use crate::shape::Weights2;
 
 use super::Cracks;
-use super::geometry::{crosses, left, norm};
+use super::geometry::{left, left_d, norm, sub};
 
 /// A field-1 pair found by the crossing test: storage index of the node, crack, side of the
 /// particle (+1 above, −1 below), normal of the crossed segment.
@@ -31,25 +31,67 @@ pub struct SlotInfo {
     pub crack: u32,
 }
 
+/// A crack segment near a particle (`Cracks::masks`): crack and segment index, the crack's
+/// group, the end points a and b, d = b − a, and whether the particle lies left of a → b.
+struct NearSeg {
+    ci: u32,
+    si: u32,
+    group: u32,
+    a: [f64; 2],
+    b: [f64; 2],
+    d: [f64; 2],
+    p_left: bool,
+}
+
 impl Cracks {
     /// Field masks of the particles `kin`/`mech` into `fmask`, and the field-1 entries
-    /// (node, crack, side vote, crossed-segment normal) in particle order.
+    /// (node, crack, side vote, crossed-segment normal) in particle order. `seg_box`: the box
+    /// of the cells holding a segment (`build_broad_phase`).
+    #[allow(clippy::too_many_arguments)]
     fn masks(
         &self,
         geom: &GridGeom,
         shape: ShapeFunction,
+        seg_box: Option<[f64; 4]>,
         kin: &[Kin],
         mech: &[Mech],
         fmask: &mut [u16],
         entries: &mut Vec<FieldEntry>,
     ) -> Result<(), (usize, u32)> {
         let cell = self.h;
+        let mut near: Vec<NearSeg> = Vec::new();
         for (i, (k, m)) in kin.iter().zip(mech).enumerate() {
+            // Most particles lie outside the box of cells holding a segment, where
+            // `segs_near` finds none (a NaN ξ is not outside and takes the full look-up).
+            let xi = geom.xi(k.x);
+            let outside = seg_box
+                .is_none_or(|b| xi[0] < b[0] || xi[0] >= b[1] || xi[1] < b[2] || xi[1] >= b[3]);
+            if outside {
+                debug_assert!(self.segs_near(geom, k.x).is_empty());
+                fmask[i] = 0;
+                continue;
+            }
             let segs = self.segs_near(geom, k.x);
             if segs.is_empty() {
                 fmask[i] = 0;
                 continue;
             }
+            // The particle's side of each nearby segment, once for its nine nodes.
+            near.clear();
+            near.extend(segs.iter().map(|&(ci, si)| {
+                let c = &self.cracks[ci as usize];
+                let (a, b) = (c.pts[si as usize].x, c.pts[si as usize + 1].x);
+                let d = sub(b, a);
+                NearSeg {
+                    ci,
+                    si,
+                    group: c.group,
+                    a,
+                    b,
+                    d,
+                    p_left: left_d(a, d, k.x),
+                }
+            }));
             let w = Weights2::new(shape, geom.xi(k.x), m.lh);
             let mut mask = 0u16;
             for a in 0..3 {
@@ -66,22 +108,22 @@ impl Cracks {
                     // Parity of crossings per crack; side and normal of the last crossing.
                     let mut hit: Option<(u32, u32, bool, [f64; 2])> = None;
                     let mut other_crack = false;
-                    for &(ci, si) in segs {
-                        let c = &self.cracks[ci as usize];
+                    for s in &near {
                         // A crack and the interface that continues it are one line with one
-                        // pair of fields: crossings count per group.
-                        let g = c.group;
-                        let (pa, pb) = (c.pts[si as usize].x, c.pts[si as usize + 1].x);
-                        if crosses(k.x, node, pa, pb) {
+                        // pair of fields: crossings count per group. The crossing test of
+                        // `geometry::crosses(k.x, node, s.a, s.b)`, its first orientation
+                        // taken from `near`.
+                        let g = s.group;
+                        if s.p_left != left_d(s.a, s.d, node)
+                            && left(k.x, node, s.a) != left(k.x, node, s.b)
+                        {
+                            let c = &self.cracks[s.ci as usize];
                             match &mut hit {
-                                None => {
-                                    hit =
-                                        Some((g, 1, left(pa, pb, k.x), c.contact_normal(si, cell)))
-                                }
+                                None => hit = Some((g, 1, s.p_left, c.contact_normal(s.si, cell))),
                                 Some(h) if h.0 == g => {
                                     h.1 += 1;
-                                    h.2 = left(pa, pb, k.x);
-                                    h.3 = c.contact_normal(si, cell);
+                                    h.2 = s.p_left;
+                                    h.3 = c.contact_normal(s.si, cell);
                                 }
                                 Some(_) => other_crack = true,
                             }
@@ -120,7 +162,7 @@ impl Cracks {
         fmask: &mut [u16],
         f1_index: &mut Vec<u32>,
     ) -> Result<(), (usize, u32)> {
-        self.build_broad_phase(geom);
+        let seg_box = self.build_broad_phase(geom);
         // Masks and field-1 entries per chunk of particles, in parallel; the chunks' entries
         // are concatenated in particle order, so the result is the same for any thread count.
         const CHUNK: usize = 4096;
@@ -135,7 +177,7 @@ impl Cracks {
             .for_each(|(((fm, kn), me), (entries, err))| {
                 entries.clear();
                 *err = None;
-                if let Err(e) = this.masks(geom, shape, kn, me, fm, entries) {
+                if let Err(e) = this.masks(geom, shape, seg_box, kn, me, fm, entries) {
                     *err = Some(e);
                 }
             });

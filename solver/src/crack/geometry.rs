@@ -24,6 +24,13 @@ pub(super) fn left(a: [f64; 2], b: [f64; 2], c: [f64; 2]) -> bool {
     (b[0] - a[0]) * (c[1] - a[1]) - (b[1] - a[1]) * (c[0] - a[0]) >= 0.0
 }
 
+/// [`left`] with the direction d = b − a computed once (`sub(b, a)`): the same operations on
+/// the same values, so the same answer to the bit.
+#[inline(always)]
+pub(super) fn left_d(a: [f64; 2], d: [f64; 2], c: [f64; 2]) -> bool {
+    d[0] * (c[1] - a[1]) - d[1] * (c[0] - a[0]) >= 0.0
+}
+
 /// Whether segment p → q crosses crack segment a → b (tie rule: on-line counts as left).
 #[inline(always)]
 pub fn crosses(p: [f64; 2], q: [f64; 2], a: [f64; 2], b: [f64; 2]) -> bool {
@@ -50,8 +57,11 @@ pub(super) fn seg_normal(a: [f64; 2], b: [f64; 2]) -> [f64; 2] {
 }
 
 impl Cracks {
-    /// Rebuild the per-cell segment lists (segments' boxes grown by 3h).
-    pub(super) fn build_broad_phase(&mut self, geom: &GridGeom) {
+    /// Rebuild the per-cell segment lists (segments' boxes grown by 3h). Returns the box of
+    /// the cells holding a segment in cell units, `[ξx_lo, ξx_hi, ξy_lo, ξy_hi]` (a point
+    /// outside `[lo, hi)` has no segment near it: [`segs_near`](Cracks::segs_near) returns
+    /// none), or None when no cell holds one.
+    pub(super) fn build_broad_phase(&mut self, geom: &GridGeom) -> Option<[f64; 4]> {
         let (ncx, ncy) = (self.ncx, self.ncy);
         self.cell_start.clear();
         self.cell_start.resize(ncx * ncy + 1, 0);
@@ -82,9 +92,14 @@ impl Cracks {
         self.cell_segs.clear();
         self.cell_segs.resize(total, (0, 0));
         let mut fill = self.cell_start.clone();
+        let mut bx: Option<[usize; 4]> = None;
         for (ci, c) in self.cracks.iter().enumerate() {
             for (si, w) in c.pts.windows(2).enumerate() {
                 let (x0, x1, y0, y1) = cells_of(w[0].x, w[1].x);
+                bx = Some(match bx {
+                    None => [x0, x1, y0, y1],
+                    Some(b) => [b[0].min(x0), b[1].max(x1), b[2].min(y0), b[3].max(y1)],
+                });
                 for cx in x0..=x1 {
                     for cy in y0..=y1 {
                         let k = &mut fill[cx * ncy + cy];
@@ -94,6 +109,8 @@ impl Cracks {
                 }
             }
         }
+        // Cell c holds the points with floor(ξ) = c, ξ ∈ [c, c + 1).
+        bx.map(|b| [b[0], b[1] + 1, b[2], b[3] + 1].map(|c| c as f64))
     }
 
     /// Segments registered in the cell containing `x`.

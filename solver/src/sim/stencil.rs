@@ -16,7 +16,7 @@
 //! sums that start at +0: results are bitwise identical (`tests/stencil_paths.rs`).
 
 use crate::grid::{GridGeom, GridMut, Node, field0_columns, visit_stencil};
-use crate::shape::Weights2;
+use crate::shape::{CachedW2, Weights2};
 
 /// The node visits of one particle's stencil. `f(S, ∇S, node)`, ∇S in cell units
 /// (`Weights2::g`), in the order a (x) then b (y).
@@ -31,7 +31,9 @@ pub(super) trait Stencil {
 /// The field-0 fast path: GIMP weights, every pair in field 0.
 pub(super) struct Field0<'a> {
     cols: [&'a mut [Node; 3]; 3],
-    w: &'a Weights2,
+    /// The unpacked weights, held by value: the passes read them from registers, not from a
+    /// `Weights2` stored on the stack for the generic path's indexed reads.
+    w: Weights2,
     /// ∇S of every pair, `[a][b]` (computed once; dropped by the optimiser where unused).
     gr: [[[f64; 2]; 3]; 3],
     /// The last row is empty (a particle whose domain lies inside one cell row).
@@ -39,9 +41,10 @@ pub(super) struct Field0<'a> {
 }
 
 impl<'a> Field0<'a> {
-    /// The stencil of GIMP weights `w` all in field 0, in the strip's grid `g`.
+    /// The stencil of the cached GIMP weights `c` all in field 0, in the strip's grid `g`.
     #[inline(always)]
-    pub(super) fn new(g: &'a mut GridMut<'_>, geom: &GridGeom, w: &'a Weights2) -> Field0<'a> {
+    pub(super) fn new(g: &'a mut GridMut<'_>, geom: &GridGeom, c: &CachedW2) -> Field0<'a> {
+        let w = c.unpack();
         let mut gr = [[[0.0; 2]; 3]; 3];
         for a in 0..3 {
             for b in 0..3 {
@@ -49,7 +52,7 @@ impl<'a> Field0<'a> {
             }
         }
         Field0 {
-            cols: field0_columns(g, geom, w),
+            cols: field0_columns(g, geom, &w),
             w,
             gr,
             // Only the last row (and column) of GIMP weights can be empty (the stencil base rule
@@ -62,7 +65,7 @@ impl<'a> Field0<'a> {
 impl Stencil for Field0<'_> {
     #[inline(always)]
     fn each(&mut self, mut f: impl FnMut(f64, [f64; 2], &mut Node)) {
-        let w = self.w;
+        let w = &self.w;
         for (a, col) in self.cols.iter_mut().enumerate() {
             if a == 2 && w.x.s[2] == 0.0 {
                 continue;
@@ -88,26 +91,26 @@ impl Stencil for Field0<'_> {
 pub(super) struct Fields<'a, 'g> {
     g: &'a mut GridMut<'g>,
     geom: &'a GridGeom,
-    w: &'a Weights2,
+    w: Weights2,
     mask: u16,
     slot_of: &'a [u32],
 }
 
 impl<'a, 'g> Fields<'a, 'g> {
-    /// The stencil of weights `w` with field mask `mask` (bit 3a + b set: pair (a, b) in
-    /// field 1, through the dense slot map `slot_of`).
+    /// The stencil of the cached weights `c` with field mask `mask` (bit 3a + b set: pair
+    /// (a, b) in field 1, through the dense slot map `slot_of`).
     #[inline(always)]
     pub(super) fn new(
         g: &'a mut GridMut<'g>,
         geom: &'a GridGeom,
-        w: &'a Weights2,
+        c: &CachedW2,
         mask: u16,
         slot_of: &'a [u32],
     ) -> Fields<'a, 'g> {
         Fields {
             g,
             geom,
-            w,
+            w: c.unpack(),
             mask,
             slot_of,
         }
@@ -117,7 +120,7 @@ impl<'a, 'g> Fields<'a, 'g> {
 impl Stencil for Fields<'_, '_> {
     #[inline(always)]
     fn each(&mut self, mut f: impl FnMut(f64, [f64; 2], &mut Node)) {
-        let w = self.w;
+        let w = &self.w;
         visit_stencil(self.g, self.geom, w, self.mask, self.slot_of, |a, b, n| {
             f(w.s(a, b), w.g(a, b), n)
         });
@@ -125,7 +128,7 @@ impl Stencil for Fields<'_, '_> {
 
     #[inline(always)]
     fn each_weighted(&mut self, mut f: impl FnMut(f64, [f64; 2], &mut Node)) {
-        let w = self.w;
+        let w = &self.w;
         visit_stencil(self.g, self.geom, w, self.mask, self.slot_of, |a, b, n| {
             let s = w.s(a, b);
             if s != 0.0 {
@@ -135,17 +138,18 @@ impl Stencil for Fields<'_, '_> {
     }
 }
 
-/// `with_stencil!(field0, g, geom, w, mask, slot_of, |st| body)`: run `body` with `st` bound
-/// to the particle's stencil, a [`Field0`] when `field0` holds (GIMP weights, `mask == 0`)
-/// and a [`Fields`] otherwise. The body is written once and compiled once per stencil type
-/// (a closure cannot be generic), so each path runs its own monomorphised copy.
+/// `with_stencil!(field0, g, geom, c, mask, slot_of, |st| body)`: run `body` with `st` bound
+/// to the stencil of the particle's cached weights `c` (a `&CachedW2`, which each path unpacks
+/// itself), a [`Field0`] when `field0` holds (GIMP weights, `mask == 0`) and a [`Fields`]
+/// otherwise. The body is written once and compiled once per stencil type (a closure cannot
+/// be generic), so each path runs its own monomorphised copy.
 macro_rules! with_stencil {
-    ($field0:expr, $g:expr, $geom:expr, $w:expr, $mask:expr, $slot_of:expr, |$st:ident| $body:expr) => {
+    ($field0:expr, $g:expr, $geom:expr, $c:expr, $mask:expr, $slot_of:expr, |$st:ident| $body:expr) => {
         if $field0 {
-            let mut $st = $crate::sim::stencil::Field0::new($g, $geom, $w);
+            let mut $st = $crate::sim::stencil::Field0::new($g, $geom, $c);
             $body
         } else {
-            let mut $st = $crate::sim::stencil::Fields::new($g, $geom, $w, $mask, $slot_of);
+            let mut $st = $crate::sim::stencil::Fields::new($g, $geom, $c, $mask, $slot_of);
             $body
         }
     };

@@ -66,7 +66,7 @@ impl Reduce for Acc {
 
 /// Accumulate the stencil's contribution into the active box of `acc`.
 #[inline(always)]
-fn grow_box(acc: &mut Acc, w: &Weights2) {
+fn grow_box(acc: &mut Acc, w: &CachedW2) {
     let (bx, by) = (w.x.base as i64, w.y.base as i64);
     if acc.has_box {
         acc.bx[0] = acc.bx[0].min(bx);
@@ -184,7 +184,7 @@ fn p2g_particle<A: Arith>(
     // so that all four passes see the same S and ∇S.
     let packed = CachedW2::pack(&cx.weights(k.x, p.mech[i].lh, lq));
     p.wts[i] = packed;
-    let w = &packed.unpack();
+    let w = &packed;
     grow_box(acc, w);
     let cracks = cx.cracks;
     let (mask, disp) = if cracks {
@@ -308,7 +308,7 @@ impl Simulation {
                     };
                     let vs = mech.vol * inv_h;
                     let field0 = field0_ok && mask == 0;
-                    let wi = p.wts[i].unpack();
+                    let wi = p.wts[i];
                     with_stencil!(field0, &mut g, &geom, &wi, mask, &slot_of, |st| {
                         let l = gather_l::<A>(&mut st);
                         let mat = &mats[mech.mat as usize];
@@ -376,7 +376,7 @@ impl Simulation {
                 for i in 0..p.len() {
                     let k = p.kin[i];
                     let mech = p.mech[i];
-                    let w = &p.wts[i].unpack();
+                    let w = &p.wts[i];
                     let mask = if has_mask { p.fmask[i] } else { 0 };
                     let field0 = field0_ok && mask == 0;
                     with_stencil!(field0, &mut g, &geom, w, mask, &slot_of, |st| {
@@ -506,7 +506,7 @@ impl Simulation {
                 let mut lq = (f64::NAN, f64::NAN);
                 for i in 0..p.len() {
                     let mech = p.mech[i];
-                    let wi = p.wts[i].unpack();
+                    let wi = p.wts[i];
                     let ok = with_stencil!(field0_ok, &mut gc, &geom, &wi, 0, &slot_of, |st| {
                         let l = gather_l::<A>(&mut st);
                         let mat = &mats[mech.mat as usize];
@@ -599,7 +599,7 @@ impl Simulation {
                     let mech = p.mech[i];
                     let mask = if has_mask { p.fmask[i] } else { 0 };
                     let field0 = field0_ok && mask == 0;
-                    let wi = p.wts[i].unpack();
+                    let wi = p.wts[i];
                     let ok = with_stencil!(field0, &mut g, &geom, &wi, mask, &slot_of, |st| {
                         let l = gather_l::<A>(&mut st);
                         let mat = &mats[mech.mat as usize];
