@@ -238,8 +238,9 @@ fn small_scene(name: &str, toughness: f64, cell: f64) -> Value {
     })
 }
 
-/// Poll a JavaScript expression (a function body returning a value) until it is truthy.
-async fn wait_js(c: &Client, what: &str, script: &str, timeout: Duration) -> Value {
+/// Poll a JavaScript expression (a function body returning a value) until it is truthy:
+/// `Ok` with that value, or `Err` with the last value once `timeout` has passed.
+async fn poll_js(c: &Client, script: &str, timeout: Duration) -> Result<Value, Value> {
     let deadline = Instant::now() + timeout;
     loop {
         let v = c.execute(script, vec![]).await.unwrap_or(Value::Null);
@@ -252,13 +253,23 @@ async fn wait_js(c: &Client, what: &str, script: &str, timeout: Duration) -> Val
             Value::Object(_) => true,
         };
         if truthy {
-            return v;
+            return Ok(v);
         }
         if Instant::now() > deadline {
+            return Err(v);
+        }
+        tokio::time::sleep(Duration::from_millis(250)).await;
+    }
+}
+
+/// Poll a JavaScript expression until it is truthy; panic with the page's errors on timeout.
+async fn wait_js(c: &Client, what: &str, script: &str, timeout: Duration) -> Value {
+    match poll_js(c, script, timeout).await {
+        Ok(v) => v,
+        Err(v) => {
             let errors = console_errors(c).await;
             panic!("timed out waiting for {what} (last value {v}); console errors: {errors:?}");
         }
-        tokio::time::sleep(Duration::from_millis(250)).await;
     }
 }
 
@@ -611,20 +622,9 @@ async fn plot_interaction(c: &Client) {
     let reset = format!(
         "const f = document.getElementById('{id}'); return f.dataset.zoomed === 'false' && f.querySelector('.plot-reset').hidden;"
     );
-    let mut tries = 0;
-    loop {
-        tries += 1;
+    for tries in 1..=4 {
         double_click(c, at).await;
-        let waited = Instant::now();
-        let mut done = false;
-        while waited.elapsed() < Duration::from_secs(3) {
-            if c.execute(&reset, vec![]).await.ok() == Some(Value::Bool(true)) {
-                done = true;
-                break;
-            }
-            tokio::time::sleep(Duration::from_millis(100)).await;
-        }
-        if done || tries == 4 {
+        if tries == 4 || poll_js(c, &reset, Duration::from_secs(3)).await.is_ok() {
             break;
         }
         eprintln!("double click {tries} did not reset the zoom; trying again");

@@ -136,6 +136,8 @@ impl Cracks {
         // hypot(d) ≥ max(|d₀|, |d₁|) up to libm's error (under an ulp, far inside the 1e-9
         // margin): a particle this far along either axis fails `r < r_feed` without the call.
         let r_box = r_feed * (1.0 + 1e-9);
+        // The disk left out of the inertial area term, per radius (`INERTIA_EXCLUSION_CELLS`).
+        let eps = radii.map(|big_r| (INERTIA_EXCLUSION_CELLS * h).min(0.5 * big_r));
         for i in range {
             let k = p.kin[i];
             let d = [k.x[0] - tip[0], k.x[1] - tip[1]];
@@ -214,8 +216,8 @@ impl Cracks {
                         }
                         term += sg * dq[jj];
                     }
-                    // The inertial area term over A − A_ε (see `INERTIA_EXCLUSION_CELLS`).
-                    let inertial = if r < (INERTIA_EXCLUSION_CELLS * h).min(0.5 * big_r) {
+                    // The inertial area term over A − A_ε.
+                    let inertial = if r < eps[kr] {
                         0.0
                     } else {
                         rho * (acc[0] * gmat[0][kk] + acc[1] * gmat[1][kk]

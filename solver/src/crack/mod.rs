@@ -249,13 +249,10 @@ impl Crack {
             }
         };
         let tip = at(0);
-        let mut prev = at(1);
-        for i in 1..n {
-            prev = at(i);
-            if geometry::dist(prev, tip) >= 0.5 * h {
-                break;
-            }
-        }
+        let prev = (1..n)
+            .map(at)
+            .find(|&p| geometry::dist(p, tip) >= 0.5 * h)
+            .unwrap_or_else(|| at(n - 1));
         let d = sub(tip, prev);
         let l = norm(d).max(1e-300);
         (tip, [d[0] / l, d[1] / l])
