@@ -53,18 +53,22 @@ fn freund_step_wave() {
 }
 
 /// Stable growth against beam theory: a double cantilever beam (arms H = 5 mm thick, initial
-/// crack 20 mm, Homalite, plane strain) opened slowly at its end (0.2 m/s per arm, light
-/// viscous damping) grows under displacement control by the equation of motion. Each arm is
-/// pulled by one column of nodes at the end (a pin: the arm's end is free to rotate; a
-/// gripped strip several nodes wide clamps the rotation and doubles J at a given opening).
-/// Beam theory with the root rotation of the arms (Kanninen 1973: each arm a cantilever built
-/// in at an effective a + χH, χ ≈ 0.64) gives G = 3E'H³Δ²/(16(a + χH)⁴) for a total opening
-/// Δ, so a crack that grows at G = Γ has a = (3E'H³Δ²/(16Γ))^¼ − χH. Once it has grown 2h,
-/// the crack length (tip to load line) at every sample stays within 8 % of that, and the
-/// crack grows by more than 4h. 0.5 mm cells (10 per arm), 2×2 particles per cell.
-/// Measured: the law before this one (G* = G_f/g(v) at the current speed) ran 4 mm past
-/// beam theory in one burst (+17 %), the seed's `wave` rule ends 16 % long (`SPEED=wave`);
-/// this law: worst +7.3 %, 24.36 mm against 23.77 mm at the end.
+/// crack 20 mm, Homalite, plane strain) opened slowly at its end (0.2 m/s per arm) grows
+/// under displacement control by the equation of motion. Each arm is pulled by one column of
+/// nodes at the end (a pin: the arm's end is free to rotate; a gripped strip several nodes
+/// wide clamps the rotation and doubles J at a given opening). Beam theory with the root
+/// rotation of the arms (Kanninen 1973: each arm a cantilever built in at an effective
+/// a + χH, χ ≈ 0.64) gives G = 3E'H³Δ²/(16(a + χH)⁴) for a total opening Δ, so a crack that
+/// grows at G = Γ has a = (3E'H³Δ²/(16Γ))^¼ − χH. Beam theory is quasi-static, and the arms'
+/// first flexural period (~290 µs) is as long as the test, so the mass-proportional damping
+/// (4·10⁴ /s) is near critical for that mode (ζ ≈ 0.9); with 10⁴ /s the crack ran in bursts
+/// as J rode the vibration and the worst deviation swung between 6.6 and 14 % with the
+/// filter time alone. Once it has grown 2h, the crack length (tip to load line) stays within
+/// 8 % of beam theory at every sample and ends within 3 %, and the crack grows by more than 4h.
+/// 0.5 mm cells (10 per arm), 2×2 particles per cell. Measured: worst +5.9 %, end +1.7 %
+/// (filter times of 2–6 cells: worst 4.4–6.9 %, end 0–2.2 %); the law before this one
+/// (relaxing on (G_f − Γ)/Γ) ends +5.0 % with a 6-cell filter, the seed's `wave` rule +4.1 %
+/// (`SPEED=wave`).
 #[test]
 fn dcb_crack_length_follows_beam_theory() {
     let h = 0.0005;
@@ -85,7 +89,7 @@ fn dcb_crack_length_follows_beam_theory() {
             {"region": {"rectangle": {"min": [m - 0.25 * h, yc + 2.0 * h], "max": [m + 0.25 * h, 1.0]}}, "velocity": {"y": vel}, "ramp_time": ramp},
             {"region": {"rectangle": {"min": [m - 0.25 * h, 0.0], "max": [m + 0.25 * h, yc - 2.0 * h]}}, "velocity": {"y": -vel}, "ramp_time": ramp}
         ],
-        "damping": {"kind": "viscous", "coefficient": 1.0e4},
+        "damping": {"kind": "viscous", "coefficient": 4.0e4},
         "time": {"end": 5.0e-4, "cfl": 0.5}
     }));
     let mat = &s.materials["m"];
@@ -132,6 +136,12 @@ fn dcb_crack_length_follows_beam_theory() {
         worst < 0.08,
         "crack length off beam theory by {:.1} %",
         100.0 * worst
+    );
+    assert!(
+        (a / beam - 1.0).abs() < 0.03,
+        "final crack length {:.2} mm vs beam theory {:.2} mm",
+        a * 1e3,
+        beam * 1e3
     );
 }
 

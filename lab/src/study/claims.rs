@@ -323,8 +323,9 @@ impl Report<'_> {
             "\n## Convergence on the reduced scene\n\n\
              `{}` at 25 m/s, frictionless, 30 µs, 2×2 particles per cell, with the bond moved to mid-cell of each \
              grid. *Mean speed*: the tip's x from the first growing sample to the end of the run, over that time. The \
-             cell-size table uses the default J ring (radius 6 cells, process zone 2 cells); the radius table names \
-             the radius in metres (the zone is a third of it). Changes are relative to the coarser cell or the \
+             cell-size table uses the default J ring (radius 6 cells, process zone 2 cells); the radius table gives \
+             the radius in cells of its grid (the zone is a third of it; the filter time stays the default 3 cells \
+             of shear-wave transit). Changes are relative to the coarser cell or the \
              smaller radius. The acceptance bounds (issue 16): 1 vs 0.5 mm within {:.0} %, 0.5 vs 0.25 mm within \
              {:.0} %, two radii within {:.0} %, fewer than {:.0} % of running samples with J1 < −0.1 Γ.\n",
             self.a.mini.display(),
@@ -403,8 +404,8 @@ impl Report<'_> {
             for h in RADIUS_CELLS {
                 let v: Vec<Option<f64>> = RADII
                     .iter()
-                    .map(|&r| {
-                        self.conv_run(Law::Motion, j, h, Some(r))
+                    .map(|&n| {
+                        self.conv_run(Law::Motion, j, h, Some(n * h))
                             .and_then(Measured::mean_to_end)
                     })
                     .collect();
@@ -422,26 +423,23 @@ impl Report<'_> {
                 row.push(verdict.clone());
                 rows.push(row);
                 conclusions.push(format!(
-                    "**J radius, J_Ic = {j} J/m², {} cells**: {} m/s at radius {}; 4 → 6 mm {}, 6 → 8 mm {}: {}.",
+                    "**J radius, J_Ic = {j} J/m², {} cells**: {} m/s at radius {} ({}); changes {}: {}.",
                     mm(h),
                     v.iter()
                         .map(|x| x.map_or("–".into(), |x| format!("{x:.0}")))
                         .collect::<Vec<_>>()
                         .join(" / "),
-                    RADII.iter().map(|r| mm(*r)).collect::<Vec<_>>().join(" / "),
-                    pct(ch[0]),
-                    pct(ch[1]),
+                    RADII.iter().map(|n| format!("{n}")).collect::<Vec<_>>().join(" / ") + " cells",
+                    RADII.iter().map(|n| mm(n * h)).collect::<Vec<_>>().join(" / "),
+                    ch.iter().map(|c| pct(*c)).collect::<Vec<_>>().join(", "),
                     verdict
                 ));
             }
         }
         let mut header = vec!["J_Ic".to_string(), "cells".into()];
-        header.extend(RADII.iter().map(|r| format!("r = {}", mm(*r))));
-        header.extend([
-            "4 → 6 mm".into(),
-            "6 → 8 mm".into(),
-            "two radii within 5 %".into(),
-        ]);
+        header.extend(RADII.iter().map(|n| format!("r = {n} cells")));
+        header.extend(RADII.windows(2).map(|w| format!("{} → {} cells", w[0], w[1])));
+        header.push("two radii within 5 %".into());
         let header: Vec<&str> = header.iter().map(String::as_str).collect();
         md.push_str(&markdown_table(&header, &rows));
         // Every run.
@@ -616,11 +614,12 @@ fn radius_verdict(ch: &[Option<f64>]) -> String {
         .iter()
         .map(|c| c.is_some_and(|c| c.abs() <= TOL_RADIUS))
         .collect();
-    let pair = |i: usize| format!("{} and {}", mm(RADII[i]), mm(RADII[i + 1]));
+    let pair = |i: usize| format!("{} and {} cells", RADII[i], RADII[i + 1]);
     if ok.iter().all(|&x| x) {
-        "met (all three radii)".into()
-    } else if let Some(i) = ok.iter().position(|&x| x) {
-        format!("met for {} only", pair(i))
+        "met (all radii)".into()
+    } else if ok.iter().any(|&x| x) {
+        let pairs: Vec<String> = (0..ok.len()).filter(|&i| ok[i]).map(pair).collect();
+        format!("met for {} only", pairs.join("; "))
     } else {
         "not met".into()
     }
@@ -677,15 +676,19 @@ mod tests {
     #[test]
     fn radius_verdict_from_the_changes() {
         assert_eq!(
-            radius_verdict(&[Some(0.01), Some(-0.04)]),
-            "met (all three radii)"
+            radius_verdict(&[Some(0.01), Some(-0.04), Some(0.0)]),
+            "met (all radii)"
         );
         assert_eq!(
-            radius_verdict(&[Some(-0.09), Some(-0.015)]),
-            "met for 6 mm and 8 mm only"
+            radius_verdict(&[Some(-0.09), Some(-0.015), Some(-0.08)]),
+            "met for 6 and 8 cells only"
         );
-        assert_eq!(radius_verdict(&[Some(0.09), Some(0.2)]), "not met");
-        assert_eq!(radius_verdict(&[None, Some(0.0)]), "not run");
+        assert_eq!(
+            radius_verdict(&[Some(0.01), Some(-0.09), Some(-0.02)]),
+            "met for 4 and 6 cells; 8 and 12 cells only"
+        );
+        assert_eq!(radius_verdict(&[Some(0.09), Some(0.2), Some(0.3)]), "not met");
+        assert_eq!(radius_verdict(&[None, Some(0.0), Some(0.0)]), "not run");
         assert_eq!(pct(change(Some(906.0), Some(910.0))), "+0.4 %");
     }
 

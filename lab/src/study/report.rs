@@ -393,9 +393,9 @@ impl Report<'_> {
             md,
             "## Two growth laws\n\n\
              - **Equation of motion** (`\"speed\": \"equation_of_motion\"`, the product's default): the tip moves \
-             v·Δt per step, the speed relaxing (over `filter_time`) to where the dynamic energy release rate, the J1 \
-             of the domain integral filtered over `filter_time`, equals the toughness Γ(v) (Freund's g(v)·G* = Γ(v) in \
-             steady state); a process zone behind the tip dissipates the \
+             v·Δt per step, the speed relaxing over `filter_time` (default 3h/c_S) towards the speed at which \
+             Freund's g(v)·G* = Γ(v) would hold for the measured dynamic energy release rate (the J1 of the domain \
+             integral filtered over `filter_time`, G* = J1/g(v)), so that in steady state J1 = Γ(v); a process zone behind the tip dissipates the \
              fracture energy Γ per unit new area (`docs/scene-extensions.md`). For a tip-only law g(v) → 0 as v → c_R, \
              so its cracks run below c_R.\n\
              - **The seed's wave rule** (`\"speed\": \"wave\"`): while J ≥ J_Ic a tip jumps c_L·Δt per step; its speed is c_L \
@@ -462,8 +462,8 @@ impl Report<'_> {
              ramped over 1 µs, for the projectile's pulse 2L_p/c_steel ≈ 30 µs (75 mm steel projectile); \
              after that the patch is free. The seed does not state how it loads the edge; a prescribed velocity \
              over the pulse is the impedance-matching idealisation of `reference-solutions.md`.\n\
-             - Propagation: J1 of the domain integral (default ring radius 6 cells, process zone a third of it) \
-             against J_Ic, under the law the run names.\n\
+             - Propagation: J1 of the domain integral (default ring radius 6 cells, process zone a third of it, filter \
+             time 3 cells of shear-wave transit) against J_Ic, under the law the run names.\n\
              - Crack faces: frictionless or Coulomb friction μ, as the sweep says.\n\
              - Fringes: plate thickness 9.5 mm and f_σ = 23 kN/m (one fringe ≈ 2.4 MPa).\n"
         );

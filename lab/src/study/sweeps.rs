@@ -26,8 +26,10 @@ pub(super) const P_CELL: &str = "grid.cell_size";
 
 /// The cell sizes (m) of the convergence table on the reduced scene.
 pub(super) const CELLS: [f64; 4] = [1.0e-3, 0.5e-3, 0.25e-3, 0.125e-3];
-/// The J domain radii (m) of the radius table.
-pub(super) const RADII: [f64; 3] = [4.0e-3, 6.0e-3, 8.0e-3];
+/// The J domain radii of the radius table, in cells of the run's grid (the default ring is 6
+/// cells; the equation of motion's default filter time is 3 cells of shear-wave transit, so
+/// at one cell size every radius runs with the same filter).
+pub(super) const RADII: [f64; 4] = [4.0, 6.0, 8.0, 12.0];
 /// The cell sizes (m) of the radius table.
 pub(super) const RADIUS_CELLS: [f64; 2] = [1.0e-3, 0.5e-3];
 /// The toughnesses (J/m²) of both convergence tables: the two ends of the seed's sweep.
@@ -333,7 +335,7 @@ fn seed_sweeps(scene: &Path, scale: Scale, law: Law, cells: &str) -> Vec<Sweep> 
 /// The convergence sweeps on the reduced scene at its own end time: for each law and
 /// J_Ic the cell sizes of [`CELLS`] down to `min_cell` (0.125 mm under the equation of motion
 /// only: the decisive cases), and for the equation of motion the radii of [`RADII`] at each
-/// cell size of [`RADIUS_CELLS`].
+/// cell size of [`RADIUS_CELLS`] (radius = cells × h).
 pub(super) fn convergence_sweeps(mini: &Path, min_cell: f64) -> Vec<Sweep> {
     let run = |j_ic, law, h, radius| Variant {
         v: 25.0,
@@ -384,7 +386,7 @@ pub(super) fn convergence_sweeps(mini: &Path, min_cell: f64) -> Vec<Sweep> {
                 end: Some(3.0e-5),
                 runs: RADII
                     .iter()
-                    .map(|&r| run(j, Law::Motion, h, Some(r)))
+                    .map(|&n| run(j, Law::Motion, h, Some(n * h)))
                     .collect(),
                 legend: |r| format!("radius {}", mm(r.radius.unwrap_or(0.0))),
             });
