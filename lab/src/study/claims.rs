@@ -438,7 +438,11 @@ impl Report<'_> {
         }
         let mut header = vec!["J_Ic".to_string(), "cells".into()];
         header.extend(RADII.iter().map(|n| format!("r = {n} cells")));
-        header.extend(RADII.windows(2).map(|w| format!("{} → {} cells", w[0], w[1])));
+        header.extend(
+            RADII
+                .windows(2)
+                .map(|w| format!("{} → {} cells", w[0], w[1])),
+        );
         header.push("two radii within 5 %".into());
         let header: Vec<&str> = header.iter().map(String::as_str).collect();
         md.push_str(&markdown_table(&header, &rows));
@@ -687,7 +691,10 @@ mod tests {
             radius_verdict(&[Some(0.01), Some(-0.09), Some(-0.02)]),
             "met for 4 and 6 cells; 8 and 12 cells only"
         );
-        assert_eq!(radius_verdict(&[Some(0.09), Some(0.2), Some(0.3)]), "not met");
+        assert_eq!(
+            radius_verdict(&[Some(0.09), Some(0.2), Some(0.3)]),
+            "not met"
+        );
         assert_eq!(radius_verdict(&[None, Some(0.0), Some(0.0)]), "not run");
         assert_eq!(pct(change(Some(906.0), Some(910.0))), "+0.4 %");
     }
