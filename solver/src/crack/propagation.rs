@@ -42,7 +42,8 @@ fn target_speed(g_filtered: f64, v: f64, c_r: f64, v_max: f64, toughness: &Tough
     }
     let g_star = g_filtered / gv;
     let excess = |u: f64| freund_g(u, c_r) * g_star - toughness.at(u);
-    if !(excess(0.0) > 0.0) {
+    let at_rest = excess(0.0);
+    if at_rest.is_nan() || at_rest <= 0.0 {
         return 0.0;
     }
     if excess(v_max) >= 0.0 {
@@ -86,7 +87,8 @@ pub(crate) fn eom_speed(
         return 0.0;
     }
     let v = v_prev.clamp(0.0, v_max);
-    if v <= 0.0 && !(g_filtered >= toughness.at_rest()) {
+    let rest = toughness.at_rest();
+    if v <= 0.0 && (rest.is_nan() || g_filtered < rest) {
         return 0.0;
     }
     let v_t = target_speed(g_filtered, v, c_r, v_max, toughness);
