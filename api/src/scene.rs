@@ -182,16 +182,30 @@ pub fn rayleigh_speed(c_l: f64, c_s: f64) -> f64 {
     let kappa = (c_s / c_l).powi(2);
     let f = |x: f64| (2.0 - x).powi(2) - 4.0 * (1.0 - x).sqrt() * (1.0 - kappa * x).sqrt();
     // f(0) = 0 is the trivial root; f is negative just above 0 and f(1) = 1 > 0.
-    let (mut lo, mut hi) = (1e-6, 1.0);
-    for _ in 0..200 {
+    let (lo, hi) = bisect(1e-6, 1.0, 200, |x| {
+        let fx = f(x);
+        fx.is_nan() || fx <= 0.0
+    });
+    c_s * (0.5 * (lo + hi)).sqrt()
+}
+
+/// Bisection: halves [lo, hi] `iterations` times, keeping the upper half where
+/// `root_above(mid)` holds and the lower half otherwise; returns the final bracket.
+pub fn bisect(
+    mut lo: f64,
+    mut hi: f64,
+    iterations: u32,
+    root_above: impl Fn(f64) -> bool,
+) -> (f64, f64) {
+    for _ in 0..iterations {
         let mid = 0.5 * (lo + hi);
-        if f(mid) > 0.0 {
-            hi = mid;
-        } else {
+        if root_above(mid) {
             lo = mid;
+        } else {
+            hi = mid;
         }
     }
-    c_s * (0.5 * (lo + hi)).sqrt()
+    (lo, hi)
 }
 
 /// A region of the plane.

@@ -11,10 +11,12 @@
 //!   transient after an advance neither starts nor stops the tip; the speed relaxes over τ
 //!   towards the speed at which Freund's g(v)·G* = Γ(v) would hold for G* = G_f/g(v)
 //!   (`eom_speed`), so its steady state is G_f = Γ(v) below c_R; a resting tip starts once
-//!   G_f ≥ Γ(0) and arrests when its target is rest; the tip moves v·Δt. Each point the tip leaves behind carries a
-//!   process-zone traction (`zone.rs`) that dissipates Γ per unit area.
+//!   G_f ≥ Γ(0) and arrests when its target is rest; the tip moves v·Δt. Each point the tip
+//!   leaves behind carries a process-zone traction (`zone.rs`) that dissipates Γ per unit area.
 
-use fracture_api::scene::{GrowthDirection, GrowthSpeed, JIntegral, Propagation, Toughness};
+use fracture_api::scene::{
+    GrowthDirection, GrowthSpeed, JIntegral, Propagation, Toughness, bisect,
+};
 
 use crate::tip_mechanics::{hoop_stress_angle, kinked_k, max_energy_release_angle};
 
@@ -49,16 +51,7 @@ fn target_speed(g_filtered: f64, v: f64, c_r: f64, v_max: f64, toughness: &Tough
     if excess(v_max) >= 0.0 {
         return v_max;
     }
-    let (mut lo, mut hi) = (0.0, v_max);
-    for _ in 0..48 {
-        let mid = 0.5 * (lo + hi);
-        if excess(mid) > 0.0 {
-            lo = mid;
-        } else {
-            hi = mid;
-        }
-    }
-    lo
+    bisect(0.0, v_max, 48, |u| excess(u) > 0.0).0
 }
 
 /// The equation of motion's speed after a step Δt: v relaxes over τ towards the speed v_t at
@@ -389,7 +382,7 @@ mod tests {
 
     /// A plant that is not the law's model: the tip's measured G is the exact-shaped
     /// g(v) = (1 − v/c_R)/√(1 − v/c_L) (c_L = 2c_R) times G*, seen one filter time late and
-    /// filtered as the solver does. Returns the speed after `t_end`, and the largest distance
+    /// filtered as the solver does. Returns the speed after 400 τ, and the largest distance
     /// of v from `v_star` after `settle`.
     fn drive(g_star: f64, toughness: &Toughness, v_star: f64, settle: f64) -> (f64, f64) {
         let (c_r, tau) = (1000.0_f64, 1.0e-6_f64);
@@ -416,12 +409,7 @@ mod tests {
         let c_r = 1000.0;
         let f =
             |v: f64| (1.0 - v / c_r) / (1.0 - v / (2.0 * c_r)).sqrt() * g_star - toughness.at(v);
-        let (mut lo, mut hi) = (0.0, c_r);
-        for _ in 0..60 {
-            let m = 0.5 * (lo + hi);
-            if f(m) > 0.0 { lo = m } else { hi = m }
-        }
-        lo
+        bisect(0.0, c_r, 60, |v| f(v) > 0.0).0
     }
 
     /// The steady speed is Freund's root for the true g (the law only knows 1 − v/c_R), and
