@@ -7,7 +7,7 @@
 
 use fracture_api::results::CrackTipRow;
 
-use fracture_api::scene::JIntegral;
+use fracture_api::scene::{GrowthSpeed, JIntegral, Propagation};
 
 use crate::grid::STRIP;
 use crate::shape::Weights2;
@@ -259,15 +259,32 @@ impl Cracks {
         let (tip, e1) = self.cracks[ci].tip_frame(t, self.h);
         let e2 = [-e1[1], e1[0]];
         let frame = |j: [f64; 2]| [j[0] * e1[0] + j[1] * e1[1], j[0] * e2[0] + j[1] * e2[1]];
-        let [j1, j2] = frame(e.j);
+        let [mut j1, j2] = frame(e.j);
+        let [mut j1_half, j2_half] = frame(e.j_half);
+        let [mut j1_double, j2_double] = frame(e.j_double);
+        // A tip grown by the equation of motion drags a process zone (`zone.rs`): its J1 is
+        // the far field's energy release rate J_tip + J_zone, the zone counted whole whatever
+        // part of it each ring's weight holds (`zone_outside_domain`).
+        if matches!(
+            self.cracks[ci].propagation,
+            Propagation::EnergyRelease {
+                speed: GrowthSpeed::EquationOfMotion,
+                ..
+            }
+        ) {
+            let r = self.j_radius(ci);
+            j1 += self.zone_outside_domain(ci, t, e1, r);
+            j1_half += self.zone_outside_domain(ci, t, e1, 0.5 * r);
+            j1_double += self.zone_outside_domain(ci, t, e1, 2.0 * r);
+        }
         TipFrameJ {
             tip,
             e1,
             e2,
             j1,
             j2,
-            j_half: frame(e.j_half),
-            j_double: frame(e.j_double),
+            j_half: [j1_half, j2_half],
+            j_double: [j1_double, j2_double],
             k_int: e.k_int,
             medium: e.medium,
         }
