@@ -576,6 +576,11 @@ pub struct View<'a> {
     pub slot_of: &'a [u32],
     /// Particle range of each strip.
     pub strip_bounds: &'a [usize],
+    /// The scene's viscous damping coefficient c (1/s; 0 without viscous damping): the force
+    /// stage took c·p off every node heavier than `m_tiny`, and J's area term adds it back.
+    pub viscous_damping: f64,
+    /// The nodal mass below which a node is not damped (kg).
+    pub m_tiny: f64,
 }
 
 impl View<'_> {
@@ -599,8 +604,16 @@ impl View<'_> {
                 if let Some(nd) = self.node(ix, iy, field)
                     && nd.m > 0.0
                 {
+                    // ∇·σ (+ external, contact and zone forces) per mass: the viscous damping
+                    // −c·p is a body force of the scheme, not of the elastic field whose J this
+                    // is (with it in ü the area term misses ∫ρc u̇·∂u/∂x_k q dA).
+                    let damp = if nd.m > self.m_tiny {
+                        self.viscous_damping
+                    } else {
+                        0.0
+                    };
                     for q in 0..2 {
-                        acc[q] += sh * nd.f[q] / nd.m;
+                        acc[q] += sh * (nd.f[q] + damp * nd.p[q]) / nd.m;
                         let vel = nd.q[q] / nd.m;
                         gv[q][0] += vel * gr[0] / h;
                         gv[q][1] += vel * gr[1] / h;

@@ -308,6 +308,11 @@ impl Simulation {
             f1: &self.f1,
             slot_of: &self.slot_of,
             strip_bounds: &self.strip_bounds,
+            viscous_damping: match self.damping {
+                Damping::Viscous { coefficient } => coefficient,
+                _ => 0.0,
+            },
+            m_tiny: self.m_tiny,
         }
     }
 }
