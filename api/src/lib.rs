@@ -12,6 +12,7 @@
 //!
 //! This crate does no IO and knows nothing of HTTP or SQL.
 
+pub mod clock;
 pub mod cost;
 pub mod jobs;
 pub mod lattice;

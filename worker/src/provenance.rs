@@ -6,14 +6,10 @@ use fracture_api::results::Provenance;
 /// build time; `None` when neither was there).
 pub const SOLVER_COMMIT: Option<&str> = option_env!("FRACTURE_GIT_COMMIT");
 
-/// Now, RFC 3339 UTC with milliseconds (`2026-12-02T02:30:00.123Z`).
+/// Now, RFC 3339 UTC with milliseconds, fixed width
+/// ([`fracture_api::clock::time_text`]), so a run's `started_at <= finished_at` as text.
 pub(crate) fn now() -> String {
-    let t = time::OffsetDateTime::now_utc();
-    let t = t
-        .replace_nanosecond(t.millisecond() as u32 * 1_000_000)
-        .unwrap_or(t);
-    t.format(&time::format_description::well_known::Rfc3339)
-        .unwrap_or_default()
+    fracture_api::clock::now_text()
 }
 
 /// This machine's host name, `None` when it cannot be read.

@@ -118,48 +118,7 @@ pub fn now_ms() -> i64 {
         .unwrap_or(0)
 }
 
-/// A UTC time as the store writes it: RFC 3339 with milliseconds
-/// (`2026-12-02T04:45:31.123Z`), which sorts as text in time order.
-pub fn time_text(t: time::OffsetDateTime) -> String {
-    let t = t.to_offset(time::UtcOffset::UTC);
-    format!(
-        "{:04}-{:02}-{:02}T{:02}:{:02}:{:02}.{:03}Z",
-        t.year(),
-        u8::from(t.month()),
-        t.day(),
-        t.hour(),
-        t.minute(),
-        t.second(),
-        t.millisecond()
-    )
-}
-
-/// Now, as the store writes times ([`time_text`]): every timestamp comes from this
-/// server's clock, bound into the query, whichever the database.
-pub fn now_text() -> String {
-    time_text(time::OffsetDateTime::now_utc())
-}
-
-/// Read back a time the store wrote ([`time_text`]); `None` if it is not one.
-pub fn parse_time_text(s: &str) -> Option<time::OffsetDateTime> {
-    let b = s.as_bytes();
-    if b.len() != 24 || b[4] != b'-' || b[7] != b'-' || b[10] != b'T' || b[23] != b'Z' {
-        return None;
-    }
-    let n = |r: std::ops::Range<usize>| s.get(r)?.parse::<u32>().ok();
-    let month = time::Month::try_from(u8::try_from(n(5..7)?).ok()?).ok()?;
-    let date =
-        time::Date::from_calendar_date(i32::try_from(n(0..4)?).ok()?, month, n(8..10)? as u8)
-            .ok()?;
-    let t = time::Time::from_hms_milli(
-        n(11..13)? as u8,
-        n(14..16)? as u8,
-        n(17..19)? as u8,
-        n(20..23)? as u16,
-    )
-    .ok()?;
-    Some(time::PrimitiveDateTime::new(date, t).assume_utc())
-}
+pub use fracture_api::clock::{now_text, parse_time_text, time_text};
 
 /// Which database a store runs on (and so which SQL dialect a query is written in).
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -567,21 +526,4 @@ async fn delete_job_rows(tx: &mut Tx, id: &str) -> Result<(), StoreError> {
         });
     }
     Ok(())
-}
-
-#[cfg(test)]
-mod tests {
-    use super::*;
-
-    #[test]
-    fn times_are_written_and_read_back_to_the_millisecond() {
-        let t = time::OffsetDateTime::from_unix_timestamp_nanos(1_796_186_731_123_456_789)
-            .expect("a time");
-        let s = time_text(t);
-        assert_eq!(s, "2026-12-02T04:45:31.123Z");
-        let back = parse_time_text(&s).expect("parses");
-        assert_eq!(back.unix_timestamp_nanos(), 1_796_186_731_123_000_000);
-        assert!(parse_time_text("2026-12-02 04:45:31").is_none());
-        assert!(parse_time_text("2026-13-02T04:45:31.123Z").is_none());
-    }
 }
