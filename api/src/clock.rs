@@ -3,8 +3,8 @@
 //! time order (the store's queries, `started_at <= finished_at` in a run's provenance); the
 //! `time` crate's well-known RFC 3339 format trims trailing zeros and would not.
 
-/// A UTC time as the store writes it: RFC 3339 with milliseconds
-/// (`2026-12-02T04:45:31.123Z`), which sorts as text in time order.
+/// A UTC time as the service writes it (the store's columns, a run's provenance): RFC 3339
+/// with milliseconds (`2026-12-02T04:45:31.123Z`), which sorts as text in time order.
 pub fn time_text(t: time::OffsetDateTime) -> String {
     let t = t.to_offset(time::UtcOffset::UTC);
     format!(

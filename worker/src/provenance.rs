@@ -6,12 +6,6 @@ use fracture_api::results::Provenance;
 /// build time; `None` when neither was there).
 pub const SOLVER_COMMIT: Option<&str> = option_env!("FRACTURE_GIT_COMMIT");
 
-/// Now, RFC 3339 UTC with milliseconds, fixed width
-/// ([`fracture_api::clock::time_text`]), so a run's `started_at <= finished_at` as text.
-pub(crate) fn now() -> String {
-    fracture_api::clock::now_text()
-}
-
 /// This machine's host name, `None` when it cannot be read.
 pub fn host() -> Option<String> {
     #[cfg(unix)]
@@ -88,7 +82,7 @@ pub(crate) fn provenance(started_at: String) -> Box<Provenance> {
         solver_commit: SOLVER_COMMIT.map(String::from),
         host: host(),
         started_at,
-        finished_at: now(),
+        finished_at: fracture_api::clock::now_text(),
         scheduler: scheduler(),
     })
 }

@@ -331,7 +331,9 @@ fn failed_summary(scene: Option<&Scene>, failure: FailureKind, message: String) 
         scene_hash: scene.map(Scene::hash).unwrap_or_default(),
         solver_version: fracture_api::SOLVER_VERSION.to_string(),
         fracture: None,
-        provenance: Some(crate::provenance::provenance(crate::provenance::now())),
+        provenance: Some(crate::provenance::provenance(
+            fracture_api::clock::now_text(),
+        )),
     }
 }
 

@@ -189,14 +189,16 @@ fn base_summary(scene: &Scene) -> Summary {
         solver_version: fracture_api::SOLVER_VERSION.to_string(),
         fracture: None,
         // Started now; `finished_at` is stamped again as the summary is handed over.
-        provenance: Some(crate::provenance::provenance(crate::provenance::now())),
+        provenance: Some(crate::provenance::provenance(
+            fracture_api::clock::now_text(),
+        )),
     }
 }
 
 /// Stamp `provenance.finished_at` (the summary is about to be handed to the sink).
 fn stamp_finish(summary: &mut Summary) {
     if let Some(p) = summary.provenance.as_mut() {
-        p.finished_at = crate::provenance::now();
+        p.finished_at = fracture_api::clock::now_text();
     }
 }
 
