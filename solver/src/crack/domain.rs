@@ -12,7 +12,8 @@
 //! force-stage contact force of each side, with that side's nodal ∂u/∂x); ü and ∂u̇/∂x come
 //! from the particle's own field's nodes (f/m and the re-extrapolated q/m). The area term is
 //! taken over A − A_ε ([`INERTIA_EXCLUSION_CELLS`], weight w), and along the tip's direction
-//! e1 the kinetic pair is integrated by parts ([`kinetic_along_tip`]):
+//! e1 the kinetic pair is integrated by parts ([`kinetic_along_tip`]) where the ring's crack
+//! runs along e1 ([`BY_PARTS_STRAIGHTNESS_DEG`]):
 //! ∫ −½ρ|u̇|² ∂q/∂x1 − w q ρ u̇·∂u̇/∂x1 dA = ∫ ½ρ|u̇|² [(w − 1) ∂q/∂x1 + q ∂w/∂x1] dA.
 //!
 //! The interaction integral with the auxiliary Williams fields of unit K in the tip frame
