@@ -454,7 +454,7 @@ mod tests {
 
     /// The kinetic pair integrated by parts equals the pair as written for a smooth field:
     /// ∫ −ke ∂q/∂x1 − w q ∂ke/∂x1 dA = ∫ ke [(w − 1) ∂q/∂x1 + q ∂w/∂x1] dA over the disk
-    /// (midpoint rule, 1,200² points), for ke = (1 + x1/R + x1²/R²)(1 + 2 x2²/R²) — larger
+    /// (midpoint rule, 1,200² points), for ke = (1 − x1/R + x1²/R²)(1 + 2 x2²/R²) — larger
     /// behind the tip than ahead, like a crack's wake — on rings where the disk's edge lies
     /// inside the plateau (R = 12 cells) and where it overlaps the ring (R = 6 cells).
     #[test]
