@@ -25,8 +25,27 @@ export class ApiError extends Error {
   }
 }
 
+/** Requests not yet answered (see `settled`). */
+const inFlight = new Set();
+
+/**
+ * Resolves once every request made through `request` so far has been answered (or failed),
+ * so that a page can delete a run without its own reads of that run failing behind it.
+ */
+export async function settled() {
+  while (inFlight.size) await Promise.allSettled([...inFlight]);
+}
+
 /** fetch + JSON with our error format. `body` objects are sent as JSON. */
-export async function request(method, path, { body, accept = 'application/json', raw = false } = {}) {
+export function request(method, path, opts = {}) {
+  const p = requestOnce(method, path, opts);
+  inFlight.add(p);
+  const done = () => inFlight.delete(p);
+  p.then(done, done);
+  return p;
+}
+
+async function requestOnce(method, path, { body, accept = 'application/json', raw = false } = {}) {
   const headers = { Accept: accept };
   const token = getToken();
   if (token) headers.Authorization = `Bearer ${token}`;

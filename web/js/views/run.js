@@ -42,6 +42,24 @@ export function tipName(row, multiCrack, nCracks = Infinity) {
   return tipLabel(row.crack, row.tip, multiCrack, nCracks);
 }
 
+/** Snapshot pictures still loading, from any run page opened so far (see `picturesLoaded`). */
+const loadingPictures = new Set();
+
+/** Counts the picture `el` as loading until it loads or fails. */
+function trackPicture(el) {
+  const p = new Promise((resolve) => {
+    el.addEventListener('load', resolve, { once: true });
+    el.addEventListener('error', resolve, { once: true });
+  });
+  loadingPictures.add(p);
+  p.then(() => loadingPictures.delete(p));
+}
+
+/** Resolves once no snapshot picture is loading. */
+async function picturesLoaded() {
+  while (loadingPictures.size) await Promise.all([...loadingPictures]);
+}
+
 export function runView(main, { id }) {
   let alive = true;
   let job = null;
@@ -222,6 +240,11 @@ export function runView(main, { id }) {
     if (!window.confirm(`Delete run "${job.name || id}" and all its results?`)) return;
     ev.target.disabled = true;
     try {
+      // let this page's own reads of the run (pictures, fringe reports, results) finish
+      // first: deleted under them they would fail with 404s
+      stop();
+      // (at most 20 s: a picture whose load never ends must not block the deletion)
+      await Promise.race([Promise.all([api.settled(), picturesLoaded()]), new Promise((r) => setTimeout(r, 20000))]);
       await api.deleteJob(id);
       notify('Run deleted.');
       location.hash = '#/runs';
@@ -343,6 +366,7 @@ export function runView(main, { id }) {
     if (img.dataset.src !== url) {
       img.dataset.src = url;
       img.src = url;
+      trackPicture(img);
     }
     img.alt = `${COMPONENT_NAMES[comp] || comp} at t = ${si(s.time, 's')}, with its colour scale and the crack path`;
     img.hidden = false;
@@ -383,6 +407,7 @@ export function runView(main, { id }) {
         showSnapshot();
         playTimer = setTimeout(step, 500);
       };
+      trackPicture(next);
       next.src = api.snapshotUrl(id, snapshots[i].index, snapshotComponents(snapshots[i]).includes(compSel.value) ? compSel.value : snapshotComponents(snapshots[i])[0], pictureOpts());
     };
     playTimer = setTimeout(step, 300);
