@@ -25,12 +25,20 @@ export class ApiError extends Error {
   }
 }
 
-/** Requests not yet answered (see `settled`). */
+/** Reads of the server not yet answered: requests and loading pictures (see `settled`). */
 const inFlight = new Set();
 
+/** Counts `p` as in flight until it settles; returns `p`. */
+export function track(p) {
+  inFlight.add(p);
+  const done = () => inFlight.delete(p);
+  p.then(done, done);
+  return p;
+}
+
 /**
- * Resolves once every request made through `request` so far has been answered (or failed),
- * so that a page can delete a run without its own reads of that run failing behind it.
+ * Resolves once every tracked read so far has been answered (or failed), so that a page can
+ * delete a run without its own reads of that run failing behind it.
  */
 export async function settled() {
   while (inFlight.size) await Promise.allSettled([...inFlight]);
@@ -38,11 +46,7 @@ export async function settled() {
 
 /** fetch + JSON with our error format. `body` objects are sent as JSON. */
 export function request(method, path, opts = {}) {
-  const p = requestOnce(method, path, opts);
-  inFlight.add(p);
-  const done = () => inFlight.delete(p);
-  p.then(done, done);
-  return p;
+  return track(requestOnce(method, path, opts));
 }
 
 async function requestOnce(method, path, { body, accept = 'application/json', raw = false } = {}) {

@@ -687,17 +687,14 @@ fn conv_row(sw: &Sweep, v: &Variant, m: &Measured) -> Vec<String> {
 /// region fixed in space lets go of the edge once it has moved about a cell, so on finer grids
 /// it loads the body for less time (`docs/scene-extensions.md`).
 fn impact_region_note(scene: &std::path::Path) -> &'static str {
-    let doc: Option<serde_json::Value> = std::fs::read_to_string(scene)
-        .ok()
-        .and_then(|t| serde_json::from_str(&t).ok());
-    let bcs = doc
+    let doc = super::read_json(scene).ok();
+    let driven: Vec<&serde_json::Value> = doc
         .as_ref()
-        .and_then(|d| d.get("boundary_conditions"))
-        .and_then(serde_json::Value::as_array)
-        .cloned()
-        .unwrap_or_default();
-    let driven: Vec<&serde_json::Value> =
-        bcs.iter().filter(|b| b.get("velocity").is_some()).collect();
+        .and_then(|d| d["boundary_conditions"].as_array())
+        .into_iter()
+        .flatten()
+        .filter(|b| b.get("velocity").is_some())
+        .collect();
     if driven.is_empty() {
         ""
     } else if driven

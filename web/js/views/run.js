@@ -42,22 +42,12 @@ export function tipName(row, multiCrack, nCracks = Infinity) {
   return tipLabel(row.crack, row.tip, multiCrack, nCracks);
 }
 
-/** Snapshot pictures still loading, from any run page opened so far (see `picturesLoaded`). */
-const loadingPictures = new Set();
-
-/** Counts the picture `el` as loading until it loads or fails. */
+/** Counts the picture `el` as a read in flight (`api.settled`) until it loads or fails. */
 function trackPicture(el) {
-  const p = new Promise((resolve) => {
+  api.track(new Promise((resolve) => {
     el.addEventListener('load', resolve, { once: true });
     el.addEventListener('error', resolve, { once: true });
-  });
-  loadingPictures.add(p);
-  p.then(() => loadingPictures.delete(p));
-}
-
-/** Resolves once no snapshot picture is loading. */
-async function picturesLoaded() {
-  while (loadingPictures.size) await Promise.all([...loadingPictures]);
+  }));
 }
 
 export function runView(main, { id }) {
@@ -244,7 +234,7 @@ export function runView(main, { id }) {
       // first: deleted under them they would fail with 404s
       stop();
       // (at most 20 s: a picture whose load never ends must not block the deletion)
-      await Promise.race([Promise.all([api.settled(), picturesLoaded()]), new Promise((r) => setTimeout(r, 20000))]);
+      await Promise.race([api.settled(), new Promise((r) => setTimeout(r, 20000))]);
       await api.deleteJob(id);
       notify('Run deleted.');
       location.hash = '#/runs';
