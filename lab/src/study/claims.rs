@@ -7,7 +7,10 @@ use std::fmt::Write as _;
 
 use super::measure::{Measured, slow_down};
 use super::report::{Report, energy_cell, negative_j_cell, speed_cell};
-use super::sweeps::{CELLS, CONV_J, Kind, Law, RADII, RADIUS_CELLS, Scale, Sweep, Variant, mm};
+use super::sweeps::{
+    CELLS, CONV_J, FREE_CELLS, FREE_J, FREE_RADIUS_CELL, Kind, Law, RADII, RADIUS_CELLS, Scale,
+    Sweep, Variant, mm, rising_table,
+};
 use crate::report::markdown_table;
 
 /// The smallest delay of initiation (s) the friction claim counts: two history samples.
@@ -22,6 +25,13 @@ const TOL_COARSE: f64 = 0.10;
 const TOL_FINE: f64 = 0.05;
 const TOL_RADIUS: f64 = 0.05;
 const TOL_NEGATIVE_J: f64 = 0.02;
+/// A running sample at or above this fraction of c_R counts as fast: the equation of motion
+/// caps the speed at 0.999 c_R, and a tip driven there (G* ≫ Γ) is within a few per cent of
+/// it from soon after initiation.
+const FAST: f64 = 0.9;
+/// The three rings' mean J1 of a free tip are taken over the running samples from this long
+/// (s) after initiation: past the start-up, where J rises from Γ(0).
+const RING_DELAY: f64 = 2.0e-6;
 
 impl Report<'_> {
     /// The claims section: one table per scene and law.
@@ -462,6 +472,8 @@ impl Report<'_> {
         let mut rows = Vec::new();
         let mut neg: Vec<(f64, Law)> = Vec::new();
         let mut ratios: Vec<(Law, f64)> = Vec::new();
+        // Equation of motion: negative samples in all, and those of a fast tip.
+        let (mut neg_all, mut neg_fast) = (0, 0);
         for sw in &conv {
             for v in &sw.runs {
                 let Some(m) = self.get(sw, v) else { continue };
@@ -469,36 +481,26 @@ impl Report<'_> {
                 if n > 0 {
                     neg.push((low as f64 / n as f64, v.law));
                 }
+                if v.law == Law::Motion {
+                    neg_all += low;
+                    neg_fast += m.fast_samples(FAST * self.speeds.c_r, v.j_ic, 0.1).1;
+                }
                 if let Some(f) = m.fracture.filter(|f| f.required > 0.0) {
                     ratios.push((v.law, f.dissipated / f.required));
                 }
-                rows.push(conv_row(sw, v, m));
+                rows.push(conv_row(sw, v, m, self.speeds.c_r));
             }
         }
-        md.push_str(&markdown_table(
-            &[
-                "sweep",
-                "J_Ic",
-                "law",
-                "cells",
-                "J radius",
-                "initiation",
-                "mean speed",
-                "tip advance",
-                "last 5 µs",
-                "running samples with J1 < −0.1 J_Ic",
-                "fracture energy required / dissipated",
-                "dissipated / required",
-                "wall",
-            ],
-            &rows,
-        ));
+        md.push_str(&markdown_table(&CONV_HEADER, &rows));
         let _ = writeln!(
             md,
             "\n*Last 5 µs*: the tip's advance over the last 5 µs of the run (zero for an arrested crack). \
+             *At ≥ {FAST} c_R*: the share of running samples whose tip speed (the solver's) is at least {FAST} c_R = {:.0} m/s (the law's cap is 0.999 c_R). \
              Fracture energy: `summary.fracture` (Γ·Δa·thickness required by the new surface, and what the growth \
              law dissipated; the rest stays in the body). Wall: {} solver thread(s) per run, with {} runs sharing the machine.\n",
-            self.a.threads, self.workers
+            FAST * self.speeds.c_r,
+            self.a.threads,
+            self.workers
         );
         for law in [Law::Motion, Law::Wave] {
             let shares: Vec<f64> = neg.iter().filter(|n| n.1 == law).map(|n| n.0).collect();
@@ -517,6 +519,12 @@ impl Report<'_> {
                 ok,
                 if ok == shares.len() { "met" } else { "not met" }
             ));
+            if law == Law::Motion && neg_all > 0 {
+                conclusions.push(format!(
+                    "**Where the negative J1 samples fall, equation of motion**: {neg_fast} of the {neg_all} came while the tip ran at ≥ {FAST} c_R. Both toughnesses send the tip to the law's cap at 0.999 c_R (see *at ≥ {FAST} c_R* and *last 5 µs*, ~{:.0} m/s): G* is many times Γ, and a tip held at the cap cannot take the energy that arrives (Freund's g(v) → 0 at c_R). The rings disagree there; a tip that runs where G_dyn = Γ(v), below the cap, is in the next section.",
+                    0.999 * self.speeds.c_r
+                ));
+            }
         }
         for law in [Law::Motion, Law::Wave] {
             let r: Vec<f64> = ratios.iter().filter(|x| x.0 == law).map(|x| x.1).collect();
@@ -566,6 +574,202 @@ impl Report<'_> {
             let _ = writeln!(md, "- {c}");
         }
         // The figures of the convergence sweeps.
+        let _ = writeln!(md);
+    }
+}
+
+impl Report<'_> {
+    /// The run of the free-tip sweeps at cell size `h` and J radius `radius` (None: the
+    /// default ring).
+    fn free_run(&self, h: f64, radius: Option<f64>) -> Option<&Measured> {
+        self.sweeps
+            .iter()
+            .filter(|s| s.kind == Kind::Free)
+            .flat_map(|s| s.runs.iter().map(move |v| (s, v)))
+            .find(|(_, v)| v.h == Some(h) && v.radius == radius)
+            .and_then(|(s, v)| self.get(s, v))
+    }
+
+    /// The free-tip section: the reduced scene with a toughness rising with speed, so the
+    /// tip runs where G_dyn = Γ(v) below the law's cap; speed against the cell size and the J
+    /// radius, and each run's J1 on the three rings.
+    pub(super) fn free_tip(&self, md: &mut String) {
+        let free: Vec<&Sweep> = self
+            .sweeps
+            .iter()
+            .filter(|s| s.kind == Kind::Free)
+            .collect();
+        if free.is_empty() {
+            return;
+        }
+        let [[_, g0], [v1, _], [v2, g2]] = rising_table(FREE_J);
+        let _ = writeln!(
+            md,
+            "\n## A free tip on the reduced scene\n\n\
+             The same scene and settings as the convergence section, with the toughness rising with speed: \
+             Γ = {g0} J/m² up to {v1} m/s, then linearly to {g2} J/m² at {v2} m/s ({:.2} c_R), constant beyond. \
+             The equation of motion then settles where G_dyn = Γ(v), below its cap at 0.999 c_R, instead of \
+             being driven to the cap. *J1 on the rings*: the mean over the running samples from {:.0} µs after \
+             initiation, on the rings of half, once and twice the J radius (`crack_tips.csv` `j1_half`, `j1`, \
+             `j1_double`); *spread*: their largest less their smallest, over their mean. Negative: below \
+             −0.1 Γ(0) = −{:.0} J/m². The bounds are those of the convergence section.\n",
+            v2 / self.speeds.c_r,
+            RING_DELAY * 1e6,
+            0.1 * g0
+        );
+        let speed = |m: Option<&Measured>| m.and_then(Measured::mean_to_end);
+        let fmt = |x: Option<f64>| x.map_or("–".into(), |x| format!("{x:.0}"));
+        let mut conclusions = Vec::new();
+        // Cell size.
+        let v: Vec<Option<f64>> = FREE_CELLS
+            .iter()
+            .map(|&h| speed(self.free_run(h, None)))
+            .collect();
+        let ch: Vec<Option<f64>> = v.windows(2).map(|w| change(w[0], w[1])).collect();
+        let met = match (ch[0], ch[1]) {
+            (Some(a), Some(b)) => Some(a.abs() <= TOL_COARSE && b.abs() <= TOL_FINE),
+            _ => None,
+        };
+        let _ = writeln!(
+            md,
+            "### Crack speed against the cell size (m/s, default ring)\n"
+        );
+        let mut row: Vec<String> = v.iter().map(|x| fmt(*x)).collect();
+        row.extend(ch.iter().map(|c| pct(*c)));
+        row.push(met_label(met));
+        md.push_str(&markdown_table(
+            &[
+                "1 mm",
+                "0.5 mm",
+                "0.25 mm",
+                "1 → 0.5 mm",
+                "0.5 → 0.25 mm",
+                "1 vs 0.5 within 10 %, 0.5 vs 0.25 within 5 %",
+            ],
+            &[row],
+        ));
+        conclusions.push(format!(
+            "**Cell size, free tip**: {} m/s at 1 / 0.5 / 0.25 mm; 1 → 0.5 mm {}, 0.5 → 0.25 mm {}: the cell-size bounds are {}.",
+            v.iter().map(|x| fmt(*x)).collect::<Vec<_>>().join(" / "),
+            pct(ch[0]),
+            pct(ch[1]),
+            met_label(met)
+        ));
+        // Radius.
+        let h = FREE_RADIUS_CELL;
+        let v: Vec<Option<f64>> = RADII
+            .iter()
+            .map(|&n| speed(self.free_run(h, Some(n * h))))
+            .collect();
+        if v.iter().any(Option::is_some) {
+            let ch: Vec<Option<f64>> = v.windows(2).map(|w| change(w[0], w[1])).collect();
+            let verdict = radius_verdict(&ch);
+            let _ = writeln!(
+                md,
+                "\n### Crack speed against the J domain radius (m/s, {} cells)\n",
+                mm(h)
+            );
+            let mut header: Vec<String> = RADII.iter().map(|n| format!("r = {n} cells")).collect();
+            header.extend(
+                RADII
+                    .windows(2)
+                    .map(|w| format!("{} → {} cells", w[0], w[1])),
+            );
+            header.push("two radii within 5 %".into());
+            let header: Vec<&str> = header.iter().map(String::as_str).collect();
+            let mut row: Vec<String> = v.iter().map(|x| fmt(*x)).collect();
+            row.extend(ch.iter().map(|c| pct(*c)));
+            row.push(verdict.clone());
+            md.push_str(&markdown_table(&header, &[row]));
+            conclusions.push(format!(
+                "**J radius, free tip, {} cells**: {} m/s at radius {} cells; changes {}: {}.",
+                mm(h),
+                v.iter().map(|x| fmt(*x)).collect::<Vec<_>>().join(" / "),
+                RADII
+                    .iter()
+                    .map(|n| format!("{n}"))
+                    .collect::<Vec<_>>()
+                    .join(" / "),
+                ch.iter().map(|c| pct(*c)).collect::<Vec<_>>().join(", "),
+                verdict
+            ));
+        }
+        // Every run: the three rings.
+        let _ = writeln!(md, "\n### Every free-tip run\n");
+        let mut rows = Vec::new();
+        let (mut spreads, mut negs, mut samples) = (Vec::new(), [0usize; 3], 0usize);
+        for sw in &free {
+            for v in &sw.runs {
+                let Some(m) = self.get(sw, v) else { continue };
+                let (means, n) = m.ring_means(RING_DELAY);
+                let (lo, hi) = range(&means);
+                let mid = means.iter().sum::<f64>() / 3.0;
+                let spread = (n > 0 && mid > 0.0).then(|| (hi - lo) / mid);
+                if let Some(s) = spread {
+                    spreads.push(s);
+                }
+                let low = m.negative_rings(g0, 0.1);
+                let (_, running) = m.negative_j(g0, 0.1);
+                for k in 0..3 {
+                    negs[k] += low[k];
+                }
+                samples += running;
+                rows.push(vec![
+                    sw.id.clone(),
+                    v.h.map_or("scene".into(), mm),
+                    v.radius.map_or("6 cells".into(), mm),
+                    m.initiation_label(),
+                    m.mean_to_end()
+                        .map_or("–".into(), |x| format!("{x:.0} m/s")),
+                    format!("{:.2} mm", last_advance(m, 5.0e-6) * 1e3),
+                    fast_cell(m, self.speeds.c_r),
+                    if n > 0 {
+                        format!("{:.0} / {:.0} / {:.0}", means[0], means[1], means[2])
+                    } else {
+                        "–".into()
+                    },
+                    spread.map_or("–".into(), |s| format!("{:.1} %", s * 100.0)),
+                    format!("{} / {} / {} of {running}", low[0], low[1], low[2]),
+                    m.fracture
+                        .filter(|f| f.required > 0.0)
+                        .map_or("–".into(), |f| {
+                            format!("{:.2}", f.dissipated / f.required)
+                        }),
+                ]);
+            }
+        }
+        md.push_str(&markdown_table(
+            &[
+                "sweep",
+                "cells",
+                "J radius",
+                "initiation",
+                "mean speed",
+                "last 5 µs",
+                "at ≥ 0.9 c_R",
+                "J1 on the rings R/2 / R / 2R (J/m²)",
+                "spread",
+                "J1 < −0.1 Γ(0) on R/2 / R / 2R",
+                "dissipated / required",
+            ],
+            &rows,
+        ));
+        if !spreads.is_empty() {
+            let (lo, hi) = range(&spreads);
+            conclusions.push(format!(
+                "**Path independence, free tip**: the three rings' mean J1 agree within {:.1}–{:.1} % over the {} runs; of {samples} running samples, {} / {} / {} are below −0.1 Γ(0) on the rings of half, once and twice the radius.",
+                lo * 100.0,
+                hi * 100.0,
+                spreads.len(),
+                negs[0],
+                negs[1],
+                negs[2]
+            ));
+        }
+        let _ = writeln!(md, "\n### What these numbers say\n");
+        for c in conclusions {
+            let _ = writeln!(md, "- {c}");
+        }
         let _ = writeln!(md);
     }
 }
@@ -659,8 +863,37 @@ fn last_advance(m: &Measured, span: f64) -> f64 {
         .map_or(0.0, |(_, x0)| x1 - x0)
 }
 
+/// The header of the table of every convergence run.
+const CONV_HEADER: [&str; 14] = [
+    "sweep",
+    "J_Ic",
+    "law",
+    "cells",
+    "J radius",
+    "initiation",
+    "mean speed",
+    "tip advance",
+    "last 5 µs",
+    "at ≥ 0.9 c_R",
+    "running samples with J1 < −0.1 J_Ic",
+    "fracture energy required / dissipated",
+    "dissipated / required",
+    "wall",
+];
+
+/// The share of running samples at ≥ [`FAST`]·c_R, as a table cell.
+fn fast_cell(m: &Measured, c_r: f64) -> String {
+    let (_, n) = m.negative_j(0.0, 0.0);
+    let (fast, _) = m.fast_samples(FAST * c_r, 0.0, 0.0);
+    if n == 0 {
+        "–".into()
+    } else {
+        format!("{:.0} %", 100.0 * fast as f64 / n as f64)
+    }
+}
+
 /// A row of the table of every convergence run.
-fn conv_row(sw: &Sweep, v: &Variant, m: &Measured) -> Vec<String> {
+fn conv_row(sw: &Sweep, v: &Variant, m: &Measured, c_r: f64) -> Vec<String> {
     vec![
         sw.id.clone(),
         format!("{}", v.j_ic),
@@ -672,6 +905,7 @@ fn conv_row(sw: &Sweep, v: &Variant, m: &Measured) -> Vec<String> {
             .map_or("–".into(), |x| format!("{x:.0} m/s")),
         format!("{:.1} mm", m.extension() * 1e3),
         format!("{:.2} mm", last_advance(m, 5.0e-6) * 1e3),
+        fast_cell(m, c_r),
         negative_j_cell(m, v.j_ic),
         energy_cell(m),
         m.fracture

@@ -35,6 +35,10 @@ pub(super) struct Measured {
     pub(super) speed: Vec<f64>,
     pub(super) growing: Vec<bool>,
     pub(super) j1: Vec<f64>,
+    /// J1 (J/m²) on the rings of half and twice the J radius (`crack_tips.csv` `j1_half`,
+    /// `j1_double`).
+    pub(super) j1_half: Vec<f64>,
+    pub(super) j1_double: Vec<f64>,
     /// The run's fracture energy (summary), if a tip grew.
     pub(super) fracture: Option<FractureEnergy>,
     /// Fringe snapshots at `FRINGE_TIMES`.
@@ -124,6 +128,62 @@ impl Measured {
         let low = running.iter().filter(|&&j| j < -frac * gamma).count();
         (low, running.len())
     }
+    /// The running samples from `delay` (s) after initiation on: their J1 on the rings of
+    /// half, once and twice the J radius.
+    fn late_rings(&self, delay: f64) -> Vec<[f64; 3]> {
+        let Some(t0) = self.initiation() else {
+            return Vec::new();
+        };
+        (0..self.t.len())
+            .filter(|&i| self.growing[i] && self.t[i] >= t0 + delay)
+            .filter_map(|i| {
+                let r = [
+                    *self.j1_half.get(i)?,
+                    *self.j1.get(i)?,
+                    *self.j1_double.get(i)?,
+                ];
+                r.iter().all(|x| x.is_finite()).then_some(r)
+            })
+            .collect()
+    }
+    /// Mean J1 (J/m²) on the rings of half, once and twice the J radius over the running
+    /// samples from `delay` (s) after initiation on, and how many samples that is.
+    pub(super) fn ring_means(&self, delay: f64) -> ([f64; 3], usize) {
+        let s = self.late_rings(delay);
+        let n = s.len();
+        let mut m = [0.0; 3];
+        for r in &s {
+            for k in 0..3 {
+                m[k] += r[k] / n as f64;
+            }
+        }
+        (if n > 0 { m } else { [f64::NAN; 3] }, n)
+    }
+    /// Of the running samples, how many have J1 below −`frac`·Γ on the rings of half, once
+    /// and twice the J radius (a ring that does not fit reads NaN and is not counted).
+    pub(super) fn negative_rings(&self, gamma: f64, frac: f64) -> [usize; 3] {
+        let mut low = [0; 3];
+        for i in (0..self.t.len()).filter(|&i| self.growing[i]) {
+            for (k, col) in [&self.j1_half, &self.j1, &self.j1_double]
+                .iter()
+                .enumerate()
+            {
+                if col.get(i).is_some_and(|&j| j < -frac * gamma) {
+                    low[k] += 1;
+                }
+            }
+        }
+        low
+    }
+    /// Running samples at or above `v_min` (m/s, the solver's tip speed): how many, and how
+    /// many of them have J1 below −`frac`·Γ.
+    pub(super) fn fast_samples(&self, v_min: f64, gamma: f64, frac: f64) -> (usize, usize) {
+        let fast: Vec<usize> = (0..self.t.len())
+            .filter(|&i| self.growing[i] && self.speed.get(i).is_some_and(|&v| v >= v_min))
+            .collect();
+        let low = fast.iter().filter(|&&i| self.j1[i] < -frac * gamma).count();
+        (fast.len(), low)
+    }
     /// Largest distance of the tip from the initial bond line (m): the first tip sample is
     /// on the bond.
     pub(super) fn off_bond(&self) -> f64 {
@@ -188,6 +248,8 @@ impl RunSink for Collect {
             self.m.speed.push(r.speed);
             self.m.growing.push(r.growing);
             self.m.j1.push(r.j1);
+            self.m.j1_half.push(r.j1_half);
+            self.m.j1_double.push(r.j1_double);
         }
         Ok(())
     }
@@ -240,6 +302,8 @@ pub(super) fn run_one(
             speed: Vec::new(),
             growing: Vec::new(),
             j1: Vec::new(),
+            j1_half: Vec::new(),
+            j1_double: Vec::new(),
             fracture: None,
             fringes: Vec::new(),
             off_material: 0.0,
@@ -295,6 +359,8 @@ mod tests {
             speed: vec![0.0; n],
             growing,
             j1: vec![100.0; n],
+            j1_half: vec![100.0; n],
+            j1_double: vec![100.0; n],
             fracture: None,
             fringes: Vec::new(),
             off_material: 0.0,
@@ -375,6 +441,29 @@ mod tests {
             -100.0, -100.0, 0.0, 0.0, 0.0, -30.0, -20.0, 50.0, 60.0, 70.0,
         ];
         assert_eq!(m.negative_j(250.0, 0.1), (1, 5));
+    }
+
+    /// The three rings: means over the running samples after the delay, negative counts per
+    /// ring (a NaN ring counts nowhere), and the fast samples' share of the negative ones.
+    #[test]
+    fn rings_and_fast_samples() {
+        let t: Vec<f64> = (0..10).map(|i| f64::from(i) * 1e-7).collect();
+        let x: Vec<f64> = (0..10)
+            .map(|i| if i < 5 { 0.0 } else { f64::from(i) * 1e-4 })
+            .collect();
+        let mut m = measured(t, x, vec![0.0; 10]);
+        // Running from sample 5 (0.5 µs).
+        m.j1 = vec![0.0, 0.0, 0.0, 0.0, 0.0, 10.0, 20.0, -30.0, 40.0, 50.0];
+        m.j1_half = vec![0.0, 0.0, 0.0, 0.0, 0.0, 20.0, 30.0, 40.0, 50.0, 60.0];
+        m.j1_double = vec![0.0, 0.0, 0.0, 0.0, 0.0, -40.0, -40.0, -40.0, f64::NAN, 0.0];
+        m.speed = vec![0.0, 0.0, 0.0, 0.0, 0.0, 500.0, 900.0, 1200.0, 1200.0, 800.0];
+        assert_eq!(m.negative_rings(100.0, 0.1), [0, 1, 3]);
+        assert_eq!(m.fast_samples(1000.0, 100.0, 0.1), (2, 1));
+        // From 0.2 µs after initiation: samples 7 and 9 (8 has a NaN ring).
+        let (means, n) = m.ring_means(0.2e-6);
+        assert_eq!(n, 2);
+        assert!((means[0] - 50.0).abs() < 1e-9 && (means[1] - 10.0).abs() < 1e-9);
+        assert!((means[2] + 20.0).abs() < 1e-9);
     }
 
     /// A tip that runs, stops and runs: the slow-down is found where it stops.

@@ -161,6 +161,7 @@ impl Report<'_> {
         self.header(&mut md);
         self.claims(&mut md);
         self.convergence(&mut md);
+        self.free_tip(&mut md);
         let _ = writeln!(md, "\n## The sweeps, run by run");
         for sw in self.sweeps {
             self.section(&mut md, &mut runs_csv, &mut series_csv, sw)?;
@@ -534,6 +535,8 @@ mod tests {
             speed: vec![1000.0; n],
             growing: (0..n).map(|i| i > 0 && len[i] > len[i - 1]).collect(),
             j1: vec![v.j_ic; n],
+            j1_half: vec![v.j_ic; n],
+            j1_double: vec![v.j_ic; n],
             fracture: None,
             x: len.clone(),
             len,

@@ -34,6 +34,22 @@ pub(super) const RADII: [f64; 4] = [4.0, 6.0, 8.0, 12.0];
 pub(super) const RADIUS_CELLS: [f64; 2] = [1.0e-3, 0.5e-3];
 /// The toughnesses (J/m²) of both convergence tables: the two ends of the seed's sweep.
 pub(super) const CONV_J: [f64; 2] = [25.0, 250.0];
+/// Γ(0) (J/m²) of the free-tip tables, whose toughness rises with speed ([`rising_table`]).
+pub(super) const FREE_J: f64 = 250.0;
+/// The cell sizes (m) of the free-tip table.
+pub(super) const FREE_CELLS: [f64; 3] = [1.0e-3, 0.5e-3, 0.25e-3];
+/// The cell size (m) of the free-tip radius table.
+pub(super) const FREE_RADIUS_CELL: f64 = 0.5e-3;
+
+/// The free tip's toughness table for Γ(0) = `j` (J/m²): constant to 500 m/s, then rising
+/// linearly to 16·Γ(0) at 1100 m/s (0.94 c_R in Homalite) and constant beyond. On the
+/// reduced Rosakis scene G* reaches several thousand J/m², so a constant J_Ic of 25 or 250
+/// sends the tip to the law's cap at 0.999 c_R, where Freund's g(v) → 0 and the near-tip
+/// field is a Rayleigh pulse no grid resolves; with this table the tip runs where
+/// G_dyn = Γ(v), below the cap.
+pub(super) fn rising_table(j: f64) -> [[f64; 2]; 3] {
+    [[0.0, j], [500.0, j], [1100.0, 16.0 * j]]
+}
 
 /// The crack-growth law of a run (`cracks[].propagation.speed`).
 #[derive(Debug, Clone, Copy, PartialEq, Eq, Hash)]
@@ -78,6 +94,9 @@ pub(super) struct Variant {
     pub(super) radius: Option<f64>,
     /// Fringe snapshots every 5 µs (off for the convergence runs).
     pub(super) snapshots: bool,
+    /// The toughness rises with speed from Γ(0) = `j_ic` ([`rising_table`]), instead of the
+    /// constant `j_ic`.
+    pub(super) rising: bool,
 }
 
 impl Variant {
@@ -95,18 +114,22 @@ impl Variant {
         if let Some(r) = self.radius {
             s.push_str(&format!(", J radius {}", mm(r)));
         }
+        if self.rising {
+            s.push_str(", Γ(v) rising");
+        }
         s
     }
     pub(super) fn key(&self, scene: &str) -> String {
         format!(
-            "{scene}|{}|{}|{}|{}|{:?}|{:?}|{}",
+            "{scene}|{}|{}|{}|{}|{:?}|{:?}|{}{}",
             self.v,
             self.j_ic,
             self.mu,
             self.law.json(),
             self.h,
             self.radius,
-            self.snapshots
+            self.snapshots,
+            if self.rising { "|rising" } else { "" }
         )
     }
     /// The JSON-path parameters of this run (as `fracture sweep --param` takes them), but for
@@ -119,7 +142,14 @@ impl Variant {
         };
         let mut p = vec![
             (P_VELOCITY, json!(EDGE_FACTOR * self.v)),
-            (P_TOUGHNESS, json!(self.j_ic)),
+            (
+                P_TOUGHNESS,
+                if self.rising {
+                    json!(rising_table(self.j_ic))
+                } else {
+                    json!(self.j_ic)
+                },
+            ),
             (P_CONTACT, contact),
             (P_SPEED, json!(self.law.json())),
         ];
@@ -151,6 +181,9 @@ pub(super) enum Kind {
     Cells,
     /// J radius on the reduced scene at one J_Ic and cell size.
     Radius,
+    /// A free tip on the reduced scene (toughness rising with speed): cell size (default
+    /// ring) and J radius runs.
+    Free,
 }
 
 /// Which scene a sweep of the seed runs on.
@@ -260,6 +293,7 @@ fn seed_run(v: f64, j_ic: f64, mu: f64, law: Law) -> Variant {
         h: None,
         radius: None,
         snapshots: true,
+        rising: false,
     }
 }
 
@@ -345,6 +379,7 @@ pub(super) fn convergence_sweeps(mini: &Path, min_cell: f64) -> Vec<Sweep> {
         h: Some(h),
         radius,
         snapshots: false,
+        rising: false,
     };
     let mut out = Vec::new();
     for law in [Law::Motion, Law::Wave] {
@@ -395,6 +430,60 @@ pub(super) fn convergence_sweeps(mini: &Path, min_cell: f64) -> Vec<Sweep> {
     out
 }
 
+/// The free-tip sweeps on the reduced scene (equation of motion, Γ(0) = [`FREE_J`] rising
+/// with speed): the cell sizes of [`FREE_CELLS`] down to `min_cell` at the default ring, and
+/// the radii of [`RADII`] at [`FREE_RADIUS_CELL`].
+pub(super) fn free_tip_sweeps(mini: &Path, min_cell: f64) -> Vec<Sweep> {
+    let run = |h, radius| Variant {
+        v: 25.0,
+        j_ic: FREE_J,
+        mu: 0.0,
+        law: Law::Motion,
+        h: Some(h),
+        radius,
+        snapshots: false,
+        rising: true,
+    };
+    let [[_, g0], [v1, _], [v2, g2]] = rising_table(FREE_J);
+    let what = format!("Γ = {g0} J/m² to {v1} m/s rising to {g2} J/m² at {v2} m/s");
+    let mut out = vec![Sweep {
+        id: "free-cells".into(),
+        kind: Kind::Free,
+        scale: Scale::Mini,
+        law: Law::Motion,
+        title: format!(
+            "A free tip on the reduced scene: cell size ({what}, equation of motion, 30 µs)"
+        ),
+        scene: mini.to_path_buf(),
+        end: Some(3.0e-5),
+        runs: FREE_CELLS
+            .iter()
+            .copied()
+            .filter(|&h| h >= min_cell * (1.0 - 1e-9))
+            .map(|h| run(h, None))
+            .collect(),
+        legend: |r| format!("h = {}", mm(r.h.unwrap_or(0.0))),
+    }];
+    if FREE_RADIUS_CELL >= min_cell * (1.0 - 1e-9) {
+        let h = FREE_RADIUS_CELL;
+        out.push(Sweep {
+            id: format!("free-radius-h{}um", (h * 1e6).round()),
+            kind: Kind::Free,
+            scale: Scale::Mini,
+            law: Law::Motion,
+            title: format!(
+                "A free tip on the reduced scene: J domain radius ({what}, {} cells, equation of motion, 30 µs)",
+                (h * 1e6).round() / 1e3
+            ),
+            scene: mini.to_path_buf(),
+            end: Some(3.0e-5),
+            runs: RADII.iter().map(|&n| run(h, Some(n * h))).collect(),
+            legend: |r| format!("radius {}", mm(r.radius.unwrap_or(0.0))),
+        });
+    }
+    out
+}
+
 pub(super) fn sweeps(a: &StudyArgs) -> anyhow::Result<Vec<Sweep>> {
     let cells = cells_label(&a.scene)?;
     let mut out = seed_sweeps(&a.scene, Scale::Base, Law::Motion, &cells);
@@ -429,6 +518,7 @@ pub(super) fn sweeps(a: &StudyArgs) -> anyhow::Result<Vec<Sweep>> {
     }
     if a.convergence {
         out.extend(convergence_sweeps(&a.mini, a.min_cell));
+        out.extend(free_tip_sweeps(&a.mini, a.min_cell));
     }
     if let Some(fine) = &a.fine {
         let cells = cells_label(fine)?;
@@ -484,9 +574,19 @@ mod tests {
     fn variant_builder_keeps_the_bond_mid_cell() {
         let path = scenes().join("rosakis-shear-mini.json");
         let base = read_json(&path).expect("the reduced scene is readable");
-        for sw in convergence_sweeps(&path, 0.125e-3) {
+        let sweeps = convergence_sweeps(&path, 0.125e-3)
+            .into_iter()
+            .chain(free_tip_sweeps(&path, 0.125e-3));
+        for sw in sweeps {
             for v in &sw.runs {
                 let doc = variant_doc(&base, v, 3.0e-5).expect("a variant");
+                // The toughness: J_Ic, or the free tip's table from it.
+                let want = if v.rising {
+                    json!(rising_table(v.j_ic))
+                } else {
+                    json!(v.j_ic)
+                };
+                assert_eq!(doc["cracks"][0]["propagation"]["toughness"], want);
                 let h = doc["grid"]["cell_size"].as_f64().unwrap_or(0.0);
                 assert_eq!(Some(h), v.h);
                 let y_min = doc["grid"]["min"][1].as_f64().unwrap_or(f64::NAN);
@@ -534,7 +634,18 @@ mod tests {
                 .iter()
                 .all(|s| s.law == Law::Motion && s.kind == Kind::Cells)
         );
-        let quick = convergence_sweeps(&path, 0.5e-3);
+        // The free tip: three cell sizes and the four radii at 0.5 mm, down to 0.25 mm.
+        let free = free_tip_sweeps(&path, 0.125e-3);
+        assert_eq!(free.iter().map(|s| s.runs.len()).sum::<usize>(), 7);
+        assert!(
+            free.iter()
+                .flat_map(|s| &s.runs)
+                .all(|v| v.rising && v.law == Law::Motion)
+        );
+        let quick = convergence_sweeps(&path, 0.5e-3)
+            .into_iter()
+            .chain(free_tip_sweeps(&path, 0.5e-3))
+            .collect::<Vec<_>>();
         assert!(
             quick
                 .iter()
