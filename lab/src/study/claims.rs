@@ -458,13 +458,7 @@ impl Report<'_> {
             }
         }
         let mut header = vec!["J_Ic".to_string(), "cells".into()];
-        header.extend(RADII.iter().map(|n| format!("r = {n} cells")));
-        header.extend(
-            RADII
-                .windows(2)
-                .map(|w| format!("{} → {} cells", w[0], w[1])),
-        );
-        header.push("two radii within 5 %".into());
+        header.extend(radius_columns());
         let header: Vec<&str> = header.iter().map(String::as_str).collect();
         md.push_str(&markdown_table(&header, &rows));
         // Every run.
@@ -669,13 +663,7 @@ impl Report<'_> {
                 "\n### Crack speed against the J domain radius (m/s, {} cells)\n",
                 mm(h)
             );
-            let mut header: Vec<String> = RADII.iter().map(|n| format!("r = {n} cells")).collect();
-            header.extend(
-                RADII
-                    .windows(2)
-                    .map(|w| format!("{} → {} cells", w[0], w[1])),
-            );
-            header.push("two radii within 5 %".into());
+            let header = radius_columns();
             let header: Vec<&str> = header.iter().map(String::as_str).collect();
             let mut row: Vec<String> = v.iter().map(|x| fmt(*x)).collect();
             row.extend(ch.iter().map(|c| pct(*c)));
@@ -822,6 +810,19 @@ fn met_label(met: Option<bool>) -> String {
         Some(false) => "not met".into(),
         None => "not run".into(),
     }
+}
+
+/// The columns of a radius table after its labels: the speed at each radius of [`RADII`], the
+/// change between neighbours, the verdict.
+fn radius_columns() -> Vec<String> {
+    let mut c: Vec<String> = RADII.iter().map(|n| format!("r = {n} cells")).collect();
+    c.extend(
+        RADII
+            .windows(2)
+            .map(|w| format!("{} → {} cells", w[0], w[1])),
+    );
+    c.push("two radii within 5 %".into());
+    c
 }
 
 /// The radius verdict from the changes between neighbouring radii of [`RADII`].

@@ -429,14 +429,19 @@ mod tests {
         );
     }
 
-    /// J1 of the running samples only: a stationary tip's negative J does not count.
-    #[test]
-    fn negative_j_counts_running_samples() {
+    /// Ten samples 0.1 µs apart, the tip at rest for the first five and running after.
+    fn starts_at_sample_five() -> Measured {
         let t: Vec<f64> = (0..10).map(|i| f64::from(i) * 1e-7).collect();
         let x: Vec<f64> = (0..10)
             .map(|i| if i < 5 { 0.0 } else { f64::from(i) * 1e-4 })
             .collect();
-        let mut m = measured(t, x, vec![0.0; 10]);
+        measured(t, x, vec![0.0; 10])
+    }
+
+    /// J1 of the running samples only: a stationary tip's negative J does not count.
+    #[test]
+    fn negative_j_counts_running_samples() {
+        let mut m = starts_at_sample_five();
         m.j1 = vec![
             -100.0, -100.0, 0.0, 0.0, 0.0, -30.0, -20.0, 50.0, 60.0, 70.0,
         ];
@@ -447,11 +452,7 @@ mod tests {
     /// ring (a NaN ring counts nowhere), and the fast samples' share of the negative ones.
     #[test]
     fn rings_and_fast_samples() {
-        let t: Vec<f64> = (0..10).map(|i| f64::from(i) * 1e-7).collect();
-        let x: Vec<f64> = (0..10)
-            .map(|i| if i < 5 { 0.0 } else { f64::from(i) * 1e-4 })
-            .collect();
-        let mut m = measured(t, x, vec![0.0; 10]);
+        let mut m = starts_at_sample_five();
         // Running from sample 5 (0.5 µs).
         m.j1 = vec![0.0, 0.0, 0.0, 0.0, 0.0, 10.0, 20.0, -30.0, 40.0, 50.0];
         m.j1_half = vec![0.0, 0.0, 0.0, 0.0, 0.0, 20.0, 30.0, 40.0, 50.0, 60.0];

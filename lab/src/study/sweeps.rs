@@ -415,7 +415,7 @@ pub(super) fn convergence_sweeps(mini: &Path, min_cell: f64) -> Vec<Sweep> {
                 law: Law::Motion,
                 title: format!(
                     "J domain radius on the reduced scene (J_Ic = {j} J/m², {} cells, equation of motion, 30 µs)",
-                    (h * 1e6).round() / 1e3
+                    mm(h)
                 ),
                 scene: mini.to_path_buf(),
                 end: Some(3.0e-5),
@@ -473,7 +473,7 @@ pub(super) fn free_tip_sweeps(mini: &Path, min_cell: f64) -> Vec<Sweep> {
             law: Law::Motion,
             title: format!(
                 "A free tip on the reduced scene: J domain radius ({what}, {} cells, equation of motion, 30 µs)",
-                (h * 1e6).round() / 1e3
+                mm(h)
             ),
             scene: mini.to_path_buf(),
             end: Some(3.0e-5),
