@@ -445,15 +445,13 @@ pub(super) fn free_tip_sweeps(mini: &Path, min_cell: f64) -> Vec<Sweep> {
         rising: true,
     };
     let [[_, g0], [v1, _], [v2, g2]] = rising_table(FREE_J);
-    let what = format!("Γ = {g0} J/m² to {v1} m/s rising to {g2} J/m² at {v2} m/s");
+    let what = format!("Γ {g0} → {g2} J/m² over {v1} → {v2} m/s");
     let mut out = vec![Sweep {
         id: "free-cells".into(),
         kind: Kind::Free,
         scale: Scale::Mini,
         law: Law::Motion,
-        title: format!(
-            "A free tip on the reduced scene: cell size ({what}, equation of motion, 30 µs)"
-        ),
+        title: format!("Free tip on the reduced scene: cell size ({what}, equation of motion)"),
         scene: mini.to_path_buf(),
         end: Some(3.0e-5),
         runs: FREE_CELLS
@@ -472,7 +470,7 @@ pub(super) fn free_tip_sweeps(mini: &Path, min_cell: f64) -> Vec<Sweep> {
             scale: Scale::Mini,
             law: Law::Motion,
             title: format!(
-                "A free tip on the reduced scene: J domain radius ({what}, {} cells, equation of motion, 30 µs)",
+                "Free tip on the reduced scene: J radius ({what}, {} cells, equation of motion)",
                 mm(h)
             ),
             scene: mini.to_path_buf(),
