@@ -697,7 +697,7 @@ impl Report<'_> {
                     spreads.push(s);
                 }
                 let low = m.negative_rings(g0, 0.1);
-                let (_, running) = m.negative_j(g0, 0.1);
+                let running = m.running();
                 for k in 0..3 {
                     negs[k] += low[k];
                 }
@@ -884,7 +884,7 @@ const CONV_HEADER: [&str; 14] = [
 
 /// The share of running samples at ≥ [`FAST`]·c_R, as a table cell.
 fn fast_cell(m: &Measured, c_r: f64) -> String {
-    let (_, n) = m.negative_j(0.0, 0.0);
+    let n = m.running();
     let (fast, _) = m.fast_samples(FAST * c_r, 0.0, 0.0);
     if n == 0 {
         "–".into()

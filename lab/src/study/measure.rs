@@ -175,6 +175,10 @@ impl Measured {
         }
         low
     }
+    /// How many samples are running (the tip advanced in that step).
+    pub(super) fn running(&self) -> usize {
+        self.growing.iter().filter(|&&g| g).count()
+    }
     /// Running samples at or above `v_min` (m/s, the solver's tip speed): how many, and how
     /// many of them have J1 below −`frac`·Γ.
     pub(super) fn fast_samples(&self, v_min: f64, gamma: f64, frac: f64) -> (usize, usize) {
@@ -460,6 +464,7 @@ mod tests {
         m.speed = vec![0.0, 0.0, 0.0, 0.0, 0.0, 500.0, 900.0, 1200.0, 1200.0, 800.0];
         assert_eq!(m.negative_rings(100.0, 0.1), [0, 1, 3]);
         assert_eq!(m.fast_samples(1000.0, 100.0, 0.1), (2, 1));
+        assert_eq!(m.running(), 5);
         // From 0.2 µs after initiation: samples 7 and 9 (8 has a NaN ring).
         let (means, n) = m.ring_means(0.2e-6);
         assert_eq!(n, 2);
