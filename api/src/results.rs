@@ -373,6 +373,12 @@ pub struct FractureEnergy {
     pub not_dissipated: f64,
     /// New crack area (m², length × thickness).
     pub new_area: f64,
+    /// The part of `required` above Γ(v) (J): what tips running within 1 % of the equation
+    /// of motion's speed limit (0.999 c_R) took beyond the toughness, up to the energy that
+    /// reached them (the wall that closes Γ(v) there). 0 when no tip ran there; absent from
+    /// summaries written before 2026-12-03.
+    #[serde(default)]
+    pub at_speed_limit: f64,
 }
 
 /// Progress of a run.

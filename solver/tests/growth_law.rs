@@ -185,7 +185,11 @@ fn strip_with_fixed_grips_runs_at_the_speed_where_toughness_meets_g_infinity() {
 /// The same strip with a constant Γ = 0.5 G_∞: the process zones behind the tip take Γ per
 /// unit of new area (Σ of the traction work of the points that have fully failed over
 /// Γ × their area, within 3 %), and the energy balance, the fracture energy included in the
-/// dissipation, closes within 5 % of the fracture energy plus 0.2 % of the work done.
+/// dissipation, closes within 5 % of the fracture energy plus 0.2 % of the work done. With
+/// G_∞ > Γ at every speed the tip has no steady state below c_R and reaches the speed wall
+/// (`WALL_FRACTION` in `propagation.rs`) after ~60 mm; the points laid there take the energy
+/// that reached the tip (175–300 J/m² here) and are checked against their own toughness, the
+/// others against Γ.
 #[test]
 fn process_zone_dissipates_the_toughness_and_the_balance_closes() {
     let (s, g_inf) = strip(0.001, &|g, _| json!(0.5 * g));
@@ -193,7 +197,9 @@ fn process_zone_dissipates_the_toughness_and_the_balance_closes() {
     let (samples, sim) = run(&s);
     let c = &sim.cracks().unwrap().cracks[0];
     let thickness = s.thickness;
-    let (mut work, mut area) = (0.0, 0.0);
+    // Failed points laid below the speed wall (their toughness is Γ), and at it (the energy
+    // that reached the tip): Σ work, Σ area, Σ toughness × area.
+    let (mut below, mut wall) = ([0.0; 3], [0.0; 3]);
     let n = c.pts.len();
     for k in 0..n {
         let Some(z) = c.pts[k].zone else { continue };
@@ -215,20 +221,30 @@ fn process_zone_dissipates_the_toughness_and_the_balance_closes() {
             -1 => 0.5 * back,
             _ => 0.5 * (back + fore),
         };
-        work += z.work;
-        area += share * thickness;
+        let sum = if z.toughness > gamma * (1.0 + 1e-12) {
+            &mut wall
+        } else {
+            &mut below
+        };
+        sum[0] += z.work;
+        sum[1] += share * thickness;
+        sum[2] += z.toughness * share * thickness;
     }
-    let per_area = work / area;
+    let (area, per_area) = (below[1], below[0] / below[1]);
     let first = samples.iter().find(|s| s.speed > 0.0).unwrap();
     let last = samples.last().unwrap();
     let fracture = last.fracture;
     let drift = (last.balance - first.balance).abs();
     let allowed = 0.05 * fracture + 0.002 * last.work;
     eprintln!(
-        "zone: failed area {:.2} mm², work per area {per_area:.2} J/m² vs Γ {gamma:.2} ({:+.2} %); \
+        "zone: failed area below the wall {:.2} mm², work per area {per_area:.2} J/m² vs Γ {gamma:.2} \
+         ({:+.2} %); at the wall {:.2} mm², work {:.4e} J vs its toughness × area {:.4e} J; \
          fracture {fracture:.4e} J, balance drift {drift:.3e} J (allowed {allowed:.3e}), work {:.4e} J",
         area * 1e6,
         100.0 * (per_area / gamma - 1.0),
+        wall[1] * 1e6,
+        wall[0],
+        wall[2],
         last.work
     );
     assert!(area > 0.02 * thickness, "too little failed area: {area}");
@@ -236,6 +252,14 @@ fn process_zone_dissipates_the_toughness_and_the_balance_closes() {
         (per_area / gamma - 1.0).abs() < 0.03,
         "{per_area} vs {gamma}"
     );
+    if wall[1] > 0.0 {
+        assert!(
+            (wall[0] / wall[2] - 1.0).abs() < 0.03,
+            "at the wall: work {} vs {}",
+            wall[0],
+            wall[2]
+        );
+    }
     assert!(drift < allowed, "balance drift {drift} vs {allowed}");
 }
 
@@ -243,32 +267,46 @@ fn dist(a: [f64; 2], b: [f64; 2]) -> f64 {
     (a[0] - b[0]).hypot(a[1] - b[1])
 }
 
-/// The reduced Rosakis bond (`scenes/rosakis-shear-mini.json`, 1 mm cells, J_Ic = 25 J/m²,
-/// frictionless, 30 µs) grown by the equation of motion, with J1 from a domain of radius
-/// 6 mm (the default 6 cells) and of 12 mm. The tip runs near c_R, where J1 ≈ Γ is what is
-/// left of kinetic and stress terms of ~1,000 J/m²; a linear elastic body cannot release
-/// negative energy, and J is path independent. So with the 12 mm ring fewer than 2 % of the
-/// running samples may read J1 < −0.1 Γ, and the mean speeds (the tip's x from the first
-/// running sample to the end) agree within 5 %. With the kinetic pair summed as written over
-/// the ring (before `domain::kinetic_along_tip`) 24 % of the 12 mm ring's samples were below.
+/// The reduced Rosakis bond (`scenes/rosakis-shear-mini.json` at 0.5 mm cells with the bond
+/// mid-cell, J_Ic = 25 J/m², frictionless, 30 µs) grown by the equation of motion, with J1
+/// from the default domain (6 cells, 3 mm) and from one of 6 mm. The tip runs at the speed
+/// limit near c_R, where J1 is what is left of kinetic and stress terms of ~1,000 J/m². A
+/// linear elastic body cannot release negative energy, and J is path independent: so with
+/// the 6 mm ring fewer than 2 % of the running samples may read J1 < −0.1 Γ, the mean speeds
+/// (the tip's x from the first running sample to the end) agree within 5 %, and the run with
+/// the default ring reads the same late J1 (mean over the running samples after 10 µs) on its
+/// rings of 1.5, 3 and 6 mm within 25 % of their mean. Before the speed wall
+/// (`WALL_FRACTION` in `propagation.rs`) the tip took only Γ there: 11 of 208 samples
+/// (5.3 %) below, 971 against 1,103 m/s (−12 %), and rings 248 / 380 / 110 J/m². With the
+/// kinetic pair summed as written over the ring (before `domain::kinetic_along_tip`) 24 % of
+/// a 12 mm ring's samples at 1 mm cells were below.
 #[test]
-fn running_j1_on_a_large_ring_stays_positive_and_gives_the_same_speed() {
+fn running_j1_is_path_independent_and_positive_at_the_speed_limit() {
     let path = concat!(
         env!("CARGO_MANIFEST_DIR"),
         "/../scenes/rosakis-shear-mini.json"
     );
     let text = std::fs::read_to_string(path).unwrap();
     let base: serde_json::Value = serde_json::from_str(&text).unwrap();
-    let gamma = 25.0;
-    let run_ring = |radius: f64| {
+    let (gamma, h) = (25.0, 0.0005);
+    let run_ring = |radius: Option<f64>| {
         let mut doc = base.clone();
+        doc["grid"]["cell_size"] = json!(h);
+        doc["time"]["end"] = json!(30.0e-6);
         let c = &mut doc["cracks"][0];
+        // The bond mid-cell, as the study puts it.
+        for p in c["points"].as_array_mut().unwrap() {
+            let y = p[1].as_f64().unwrap();
+            p[1] = json!(((y / h + 1e-9).floor() + 0.5) * h);
+        }
         c["propagation"]["speed"] = json!("equation_of_motion");
         c["propagation"]["toughness"] = json!(gamma);
-        c["j_integral"] = json!({"method": "domain", "radius": radius});
+        if let Some(r) = radius {
+            c["j_integral"] = json!({"method": "domain", "radius": r});
+        }
         let s = scene(doc);
         let mut sim = sim(&s, 0);
-        let (mut j1, mut first, mut last) = (Vec::new(), None, None);
+        let (mut j1, mut late, mut first, mut last) = (Vec::new(), Vec::new(), None, None);
         while !sim.is_finished() {
             sim.step().unwrap();
             let c = &sim.cracks().unwrap().cracks[0];
@@ -278,24 +316,50 @@ fn running_j1_on_a_large_ring_stays_positive_and_gives_the_same_speed() {
             let x = c.pts[c.pts.len() - 1].x[0];
             first.get_or_insert((sim.time(), x));
             last = Some((sim.time(), x));
+            let t = sim.time();
             if let Some(r) = sim.crack_tips().first() {
                 j1.push(r.j1);
+                if t > 10.0e-6 {
+                    late.push([r.j1_half, r.j1, r.j1_double]);
+                }
             }
         }
         let ((t0, x0), (t1, x1)) = (first.unwrap(), last.unwrap());
         let negative = j1.iter().filter(|&&j| j < -0.1 * gamma).count();
-        ((x1 - x0) / (t1 - t0), negative, j1.len())
+        let n = late.len().max(1) as f64;
+        let means: Vec<f64> = (0..3)
+            .map(|k| late.iter().map(|r| r[k]).sum::<f64>() / n)
+            .collect();
+        let fracture = sim.fracture_energy().unwrap();
+        ((x1 - x0) / (t1 - t0), negative, j1.len(), means, fracture)
     };
-    let (v6, n6, of6) = run_ring(0.006);
-    let (v12, n12, of12) = run_ring(0.012);
+    let (v3, _, of3, means, fracture) = run_ring(None);
+    let (v6, n6, of6, _, _) = run_ring(Some(0.006));
+    let mean = means.iter().sum::<f64>() / 3.0;
+    let spread = means
+        .iter()
+        .map(|m| (m / mean - 1.0).abs())
+        .fold(0.0, f64::max);
     eprintln!(
-        "rosakis bond: ring 6 mm {v6:.0} m/s, {n6} of {of6} running samples with J1 < -0.1 Γ; \
-         ring 12 mm {v12:.0} m/s, {n12} of {of12}"
+        "rosakis bond, 0.5 mm: ring 3 mm {v3:.0} m/s ({of3} running samples), late J1 on \
+         1.5 / 3 / 6 mm {:.0} / {:.0} / {:.0} J/m² (spread {:.1} %); ring 6 mm {v6:.0} m/s, \
+         {n6} of {of6} running samples with J1 < -0.1 Γ; fracture energy {:.3e} J, of it \
+         {:.3e} J above Γ at the speed limit",
+        means[0],
+        means[1],
+        means[2],
+        100.0 * spread,
+        fracture.required,
+        fracture.at_speed_limit
     );
-    assert!(of12 > 50, "the crack barely ran: {of12} samples");
+    assert!(of6 > 100, "the crack barely ran: {of6} samples");
     assert!(
-        (n12 as f64) < 0.02 * of12 as f64,
-        "ring 12 mm: {n12} of {of12} running samples with J1 < -0.1 Γ"
+        (n6 as f64) < 0.02 * of6 as f64,
+        "ring 6 mm: {n6} of {of6} running samples with J1 < -0.1 Γ"
     );
-    assert!((v12 / v6 - 1.0).abs() < 0.05, "speeds {v6} and {v12} m/s");
+    assert!((v6 / v3 - 1.0).abs() < 0.05, "speeds {v3} and {v6} m/s");
+    assert!(
+        spread < 0.25,
+        "late J1 on 1.5 / 3 / 6 mm rings: {means:?} J/m²"
+    );
 }

@@ -110,8 +110,12 @@ pub struct TipState {
     history: VecDeque<(f64, f64)>,
     /// The tip advanced in the last step.
     pub grew: bool,
-    /// Energy the new surface takes per unit thickness (J/m): Σ Γ(v)·Δa over advances.
+    /// Energy the new surface takes per unit thickness (J/m): Σ Γ(v)·Δa over advances (at the
+    /// speed wall, the energy that reached the tip: `propagation::WALL_FRACTION`).
     pub required: f64,
+    /// The part of `required` above Γ(v), taken at the speed limit (J/m).
+    #[serde(default)]
+    pub above_toughness: f64,
     /// The driving force G filtered over the filter time (equation of motion); NaN until the
     /// first finite sample.
     pub g_filtered: f64,
@@ -510,17 +514,19 @@ impl Cracks {
         self.zone_work
     }
 
-    /// Σ Γ(v)·Δa·thickness over every advance of every tip (J): the energy the new surface
-    /// takes; and the new crack area (m²).
-    pub fn fracture_required(&self) -> (f64, f64) {
-        let (mut e, mut a) = (0.0, 0.0);
+    /// Σ Γ·Δa·thickness over every advance of every tip (J): the energy the new surface
+    /// takes; the part of it above Γ(v), taken at the speed limit (J); and the new crack
+    /// area (m²).
+    pub fn fracture_required(&self) -> (f64, f64, f64) {
+        let (mut e, mut above, mut a) = (0.0, 0.0, 0.0);
         for c in &self.cracks {
             for t in &c.tips {
                 e += t.required * self.thickness;
+                above += t.above_toughness * self.thickness;
                 a += t.advance * self.thickness;
             }
         }
-        (e, a)
+        (e, above, a)
     }
 
     /// Whether some tip can grow.

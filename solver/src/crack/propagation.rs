@@ -54,10 +54,28 @@ fn target_speed(g_filtered: f64, v: f64, c_r: f64, v_max: f64, toughness: &Tough
     bisect(0.0, v_max, 48, |u| excess(u) > 0.0).0
 }
 
+/// The equation of motion's speed limit, as a fraction of c_R: Freund's g(v) vanishes at
+/// c_R, so no finite G* drives a tip there.
+pub(crate) const SPEED_LIMIT: f64 = 1.0 - 1e-3;
+
+/// Where the toughness curve is closed by a wall: from 99 % of the speed limit up, the new
+/// surface takes the energy that reaches the tip, max(Γ(v), G_f) (`propagate`), so any
+/// G_f ≥ Γ(v) balances there. The grid does not deliver Freund's fall of G_f towards c_R
+/// (g(v) → 0): on the reduced Rosakis bond a tip held near c_R keeps G_f ≈ 400–1,000 J/m²
+/// against Γ = 25 or 250. Taking only Γ(v) there left the difference in the body next to the
+/// new faces, and J1 then depended on the ring (0.5 mm cells, J_Ic = 25: 680 / 458 / 44 J/m²
+/// on 3 / 6 / 12 mm rings, 5.3 % of the 6 mm ring's samples below −0.1 Γ; with the wall 0 %).
+pub(crate) const WALL_FRACTION: f64 = 0.99;
+
+/// Whether a tip running at v is at the wall that closes Γ(v) ([`WALL_FRACTION`]).
+pub(crate) fn at_speed_wall(v: f64, c_r: f64) -> bool {
+    v >= WALL_FRACTION * SPEED_LIMIT * c_r
+}
+
 /// The equation of motion's speed after a step Δt: v relaxes over τ towards the speed v_t at
 /// which the measured balance would hold, dv/dt = (v_t − v)/τ, with g(v_t)·G* = Γ(v_t) and
 /// G* = G_f/g(v) ([`target_speed`]); from rest only once G_f ≥ Γ(0); a tip whose target is
-/// rest arrests at once (G_f is already filtered over τ). Kept in [0, 0.999 c_R].
+/// rest arrests at once (G_f is already filtered over τ). Kept in [0, [`SPEED_LIMIT`]·c_R].
 ///
 /// G_f is the dynamic energy release rate measured at the running tip, Freund's g(v)·G*, so
 /// v_t = v exactly where G_f = Γ(v): the steady state is his equation of motion whatever g
@@ -75,7 +93,7 @@ pub(crate) fn eom_speed(
     dt: f64,
     tau: f64,
 ) -> f64 {
-    let v_max = (1.0 - 1e-3) * c_r;
+    let v_max = SPEED_LIMIT * c_r;
     if !(g_filtered.is_finite() && c_r.is_finite() && c_r > 0.0 && tau > 0.0) {
         return 0.0;
     }
@@ -277,7 +295,16 @@ impl Cracks {
                         }
                         let zone_len =
                             process_zone.unwrap_or(Propagation::DEFAULT_ZONE_FRACTION * radius);
-                        (speed * dt, toughness.at(speed), zone_len)
+                        // Γ(v), or at the wall that closes it near the speed limit, the
+                        // energy that reaches the tip (`WALL_FRACTION`).
+                        let gamma_v = toughness.at(speed);
+                        let gamma = if at_speed_wall(speed, tf.medium.c_r) {
+                            gamma_v.max(tip_state.g_filtered)
+                        } else {
+                            gamma_v
+                        };
+                        tip_state.above_toughness += (gamma - gamma_v) * speed * dt;
+                        (speed * dt, gamma, zone_len)
                     }
                 };
                 let new_zone =

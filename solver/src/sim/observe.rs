@@ -105,13 +105,14 @@ impl Simulation {
     /// rest, which stayed in the body.
     pub fn fracture_energy(&self) -> Option<fracture_api::results::FractureEnergy> {
         let c = self.cracks.as_ref().filter(|c| c.can_grow())?;
-        let (required, new_area) = c.fracture_required();
+        let (required, above_toughness, new_area) = c.fracture_required();
         let dissipated = c.zone_work();
         Some(fracture_api::results::FractureEnergy {
             required,
             dissipated,
             not_dissipated: required - dissipated,
             new_area,
+            at_speed_limit: above_toughness,
         })
     }
 
