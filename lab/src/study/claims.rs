@@ -26,7 +26,7 @@ const TOL_FINE: f64 = 0.05;
 const TOL_RADIUS: f64 = 0.05;
 const TOL_NEGATIVE_J: f64 = 0.02;
 /// A running sample at or above this fraction of c_R counts as fast: the equation of motion
-/// caps the speed at 0.999 c_R, and a tip driven there (G* ≫ Γ) is within a few per cent of
+/// limits the speed to 0.999 c_R, and a tip driven there (G* ≫ Γ) is within a few per cent of
 /// it from soon after initiation.
 const FAST: f64 = 0.9;
 /// The three rings' mean J1 of a free tip are taken over the running samples from this long
@@ -465,7 +465,7 @@ impl Report<'_> {
         let _ = writeln!(md, "\n### Every convergence run\n");
         let mut rows = Vec::new();
         let mut neg: Vec<(f64, Law)> = Vec::new();
-        let mut ratios: Vec<(Law, f64)> = Vec::new();
+        let mut ratios: Vec<(Law, f64, f64)> = Vec::new();
         // Equation of motion: negative samples in all, and those of a fast tip.
         let (mut neg_all, mut neg_fast) = (0, 0);
         for sw in &conv {
@@ -480,7 +480,11 @@ impl Report<'_> {
                     neg_fast += m.fast_samples(FAST * self.speeds.c_r, v.j_ic, 0.1).1;
                 }
                 if let Some(f) = m.fracture.filter(|f| f.required > 0.0) {
-                    ratios.push((v.law, f.dissipated / f.required));
+                    ratios.push((
+                        v.law,
+                        f.dissipated / f.required,
+                        f.at_speed_limit / f.required,
+                    ));
                 }
                 rows.push(conv_row(sw, v, m, self.speeds.c_r));
             }
@@ -489,9 +493,10 @@ impl Report<'_> {
         let _ = writeln!(
             md,
             "\n*Last 5 µs*: the tip's advance over the last 5 µs of the run (zero for an arrested crack). \
-             *At ≥ {FAST} c_R*: the share of running samples whose tip speed (the solver's) is at least {FAST} c_R = {:.0} m/s (the law's cap is 0.999 c_R). \
+             *At ≥ {FAST} c_R*: the share of running samples whose tip speed (the solver's) is at least {FAST} c_R = {:.0} m/s (the law's speed limit is 0.999 c_R). \
              Fracture energy: `summary.fracture` (Γ·Δa·thickness required by the new surface, and what the growth \
-             law dissipated; the rest stays in the body). Wall: {} solver thread(s) per run, with {} runs sharing the machine.\n",
+             law dissipated; the rest stays in the body). From 99 % of the limit up a wall closes Γ(v): the new surface there takes the energy that reaches the tip, G_f, \
+             when it exceeds Γ (`summary.fracture.at_speed_limit`; `docs/scene-extensions.md`). Wall: {} solver thread(s) per run, with {} runs sharing the machine.\n",
             FAST * self.speeds.c_r,
             self.a.threads,
             self.workers
@@ -515,7 +520,7 @@ impl Report<'_> {
             ));
             if law == Law::Motion && neg_all > 0 {
                 conclusions.push(format!(
-                    "**Where the negative J1 samples fall, equation of motion**: {neg_fast} of the {neg_all} came while the tip ran at ≥ {FAST} c_R. Both toughnesses send the tip to the law's cap at 0.999 c_R (see *at ≥ {FAST} c_R* and *last 5 µs*, ~{:.0} m/s): G* is many times Γ, and a tip held at the cap cannot take the energy that arrives (Freund's g(v) → 0 at c_R). The rings disagree there; a tip that runs where G_dyn = Γ(v), below the cap, is in the next section.",
+                    "**Where the negative J1 samples fall, equation of motion**: {neg_fast} of the {neg_all} came while the tip ran at ≥ {FAST} c_R. Both toughnesses send the tip to the law's speed limit at 0.999 c_R (see *at ≥ {FAST} c_R* and *last 5 µs*, ~{:.0} m/s), where G* is many times Γ and the wall that closes Γ(v) makes the tip take the energy that reaches it; a tip that runs where G_dyn = Γ(v), below the limit, is in the next section.",
                     0.999 * self.speeds.c_r
                 ));
             }
@@ -526,6 +531,17 @@ impl Report<'_> {
                 continue;
             }
             let (lo, hi) = range(&r);
+            let wall: Vec<f64> = ratios.iter().filter(|x| x.0 == law).map(|x| x.2).collect();
+            let (wall_lo, wall_hi) = range(&wall);
+            let wall_note = if wall_hi > 0.0 {
+                format!(
+                    " Of what it requires, {:.0}–{:.0} % was taken above Γ at the speed wall (`summary.fracture.at_speed_limit`): the energy the grid delivers to a tip near c_R, a numerical quantity (it rises with refinement), not a property of Homalite.",
+                    wall_lo * 100.0,
+                    wall_hi * 100.0
+                )
+            } else {
+                String::new()
+            };
             conclusions.push(if hi <= 0.0 {
                 format!(
                     "**Fracture energy, {}**: the growth dissipated none of the fracture energy its new surface requires, in all {} runs (it stays in the body as waves: `summary.fracture.not_dissipated`).",
@@ -534,7 +550,7 @@ impl Report<'_> {
                 )
             } else {
                 format!(
-                    "**Fracture energy, {}**: the growth dissipated {:.0}–{:.0} % of the fracture energy its new surface requires, over {} runs.",
+                    "**Fracture energy, {}**: the growth dissipated {:.0}–{:.0} % of the fracture energy its new surface requires, over {} runs.{wall_note}",
                     law.label(),
                     lo * 100.0,
                     hi * 100.0,
@@ -585,7 +601,7 @@ impl Report<'_> {
     }
 
     /// The free-tip section: the reduced scene with a toughness rising with speed, so the
-    /// tip runs where G_dyn = Γ(v) below the law's cap; speed against the cell size and the J
+    /// tip runs where G_dyn = Γ(v) below the law's speed limit; speed against the cell size and the J
     /// radius, and each run's J1 on the three rings.
     pub(super) fn free_tip(&self, md: &mut String) {
         let free: Vec<&Sweep> = self
@@ -602,8 +618,8 @@ impl Report<'_> {
             "\n## A free tip on the reduced scene\n\n\
              The same scene and settings as the convergence section, with the toughness rising with speed: \
              Γ = {g0} J/m² up to {v1} m/s, then linearly to {g2} J/m² at {v2} m/s ({:.2} c_R), constant beyond. \
-             The equation of motion then settles where G_dyn = Γ(v), below its cap at 0.999 c_R, instead of \
-             being driven to the cap. *J1 on the rings*: the mean over the running samples from {:.0} µs after \
+             The equation of motion then settles where G_dyn = Γ(v), below its speed limit at 0.999 c_R, instead of \
+             being driven to the limit. *J1 on the rings*: the mean over the running samples from {:.0} µs after \
              initiation, on the rings of half, once and twice the J radius (`crack_tips.csv` `j1_half`, `j1`, \
              `j1_double`); *spread*: their largest less their smallest, over their mean. Negative: below \
              −0.1 Γ(0) = −{:.0} J/m². The bounds are those of the convergence section.\n",

@@ -44,9 +44,9 @@ pub(super) const FREE_RADIUS_CELL: f64 = 0.5e-3;
 /// The free tip's toughness table for Γ(0) = `j` (J/m²): constant to 500 m/s, then rising
 /// linearly to 16·Γ(0) at 1100 m/s (0.94 c_R in Homalite) and constant beyond. On the
 /// reduced Rosakis scene G* reaches several thousand J/m², so a constant J_Ic of 25 or 250
-/// sends the tip to the law's cap at 0.999 c_R, where Freund's g(v) → 0 and the domain J
-/// loses path independence near the new faces (`docs/rosakis-resolution.md`); with this
-/// table the tip runs where G_dyn = Γ(v), below the cap.
+/// sends the tip to the law's speed limit at 0.999 c_R, where Freund's g(v) → 0 and the tip
+/// takes what the grid delivers (the wall that closes Γ(v), `docs/scene-extensions.md`);
+/// with this table the tip runs where G_dyn = Γ(v), below the limit.
 pub(super) fn rising_table(j: f64) -> [[f64; 2]; 3] {
     [[0.0, j], [500.0, j], [1100.0, 16.0 * j]]
 }
