@@ -535,7 +535,7 @@ impl Report<'_> {
             let (wall_lo, wall_hi) = range(&wall);
             let wall_note = if wall_hi > 0.0 {
                 format!(
-                    " Of what it requires, {:.0}–{:.0} % was taken above Γ at the speed wall (`summary.fracture.at_speed_limit`): the energy the grid delivers to a tip near c_R, a numerical quantity (it rises with refinement), not a property of Homalite.",
+                    " Of what it requires, {:.0}–{:.0} % was taken above Γ at the speed wall (`summary.fracture.at_speed_limit`): the energy the grid delivers to a tip near c_R, a numerical quantity (it changes with the cell size and with the J ring: see *fracture energy required* in the table), not a property of Homalite. The speeds do not depend on it: the limit sets them.",
                     wall_lo * 100.0,
                     wall_hi * 100.0
                 )
