@@ -7,6 +7,7 @@ import io
 import json
 import struct
 from pathlib import Path
+from typing import List
 
 import numpy as np
 import pytest
@@ -73,7 +74,7 @@ def test_fsn1_rejects_malformed(mutate, why: str) -> None:  # type: ignore[no-un
         decode_snapshot(mutate(encode_snapshot(_snapshot())))
 
 
-def _write_mcap(path: Path, snaps: list, finish: bool = True) -> None:
+def _write_mcap(path: Path, snaps: List[Snapshot], finish: bool = True) -> None:
     """A file shaped like the Rust writer's: JSON messages, zstd chunks, one chunk per
     snapshot, the scene as metadata."""
     f = open(path, "wb")
@@ -102,13 +103,14 @@ def _write_mcap(path: Path, snaps: list, finish: bool = True) -> None:
         w.add_message(snap_ch, ns, json.dumps(msg).encode(), ns)
         f.flush()
     if finish:
-        w.finish()
+        w.finish()  # type: ignore[no-untyped-call]
     f.close()
 
 
-def _chunk_offsets(data: bytes) -> list:
+def _chunk_offsets(data: bytes) -> List[int]:
     """Offsets of the chunk records (opcode 0x06) of an MCAP file's data section."""
-    out, pos = [], 8
+    out: List[int] = []
+    pos = 8
     while pos + 9 <= len(data):
         op, length = data[pos], struct.unpack_from("<Q", data, pos + 1)[0]
         if op == 0x06:

@@ -519,8 +519,7 @@ class Client:
             check: raise :class:`JobFailed` if the job ends ``failed`` or ``cancelled``.
             poll: seconds between polls while the stream is unavailable.
         """
-        current = job if isinstance(job, Job) else self.job(job)
-        current = Job(self, current.raw)
+        current = self.job(job)  # the state now, not that of an old Job object
         deadline = None if timeout is None else time.monotonic() + timeout
         report = _progress_printer(sys.stderr) if progress is True else progress or None
         if report is not None:
@@ -661,7 +660,8 @@ class Client:
                     if explicit:
                         raise FractureError(f"job {jid} is {job.status}: it has no summary yet")
                     continue
-                _write_atomic(target, lambda f: f.write(json.dumps(job.summary, indent=2).encode()))  # type: ignore[union-attr]
+                text = json.dumps(job.summary, indent=2).encode()
+                _write_atomic(target, lambda f: f.write(text))
                 out[n] = target
                 continue
             route, accept = DOWNLOADS[n]
@@ -833,7 +833,7 @@ def _sse_events(resp: http.client.HTTPResponse, url: str) -> Iterator[Event]:
 def _progress_printer(stream: IO[str]) -> Callable[[Job], None]:
     """The ``progress=True`` reporter of :meth:`Client.wait`."""
     tty = bool(getattr(stream, "isatty", lambda: False)())
-    state = {"decile": -1, "status": "", "width": 0, "start": time.monotonic()}
+    state: Dict[str, Any] = {"decile": -1, "status": "", "width": 0}
 
     def line(job: Job) -> str:
         p = job.progress or {}

@@ -69,7 +69,9 @@ class ApiError(FractureError):
         text = f"{method} {url}: {status} {error}: {message}".strip()
         for d in self.details:
             path = d.get("path", "")
-            text += f"\n  {path}: {d.get('message', '')}" if path else f"\n  {d.get('message', '')}"
+            line = f"{path}: {d.get('message', '')}" if path else str(d.get("message", ""))
+            if line not in message:
+                text += f"\n  {line}"
         super().__init__(text)
 
 
