@@ -1,7 +1,7 @@
 //! The public data model of mpm-fracture.
 //!
-//! * [`scene`]: the scene document (`../shared/design/scene-format.md`), with serde defaults,
-//!   `deny_unknown_fields` and a JSON Schema.
+//! * [`scene`]: the scene document (explained field by field in `docs/scenes.md`), with serde
+//!   defaults, `deny_unknown_fields` and a JSON Schema.
 //! * [`validate`]: validation of a scene, reporting every problem with its JSON path and value.
 //! * [`results`]: the rows and files a run produces (`run-output.md`): energy and crack-tip
 //!   history rows, field snapshots, the run summary.

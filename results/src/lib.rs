@@ -1,4 +1,4 @@
-//! The files of a run (`../shared/design/run-output.md`), one copy of each format:
+//! The files of a run (`docs/run-output.md`), one copy of each format:
 //!
 //! * [`mcapfile`]: the `fields.mcap` file (writer and readers; channels in `docs/mcap.md`).
 //! * [`codec`]: the binary snapshot encoding of worker uploads and the store.

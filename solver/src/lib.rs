@@ -3,9 +3,10 @@
 //! A [`Simulation`] is built from a validated [`Scene`](fracture_api::Scene), advanced by
 //! [`Simulation::step`], and observed through read-only views ([`Simulation::energy`],
 //! [`Simulation::crack_tips`], [`Simulation::snapshot`], [`Simulation::particles`]).
-//! The method is written out in `../shared/design/algorithm.md`; modules follow its
-//! sections: [`shape`] (§1), [`grid`] and [`particles`] (data), [`sim`] (§2), [`material`],
-//! [`crack`] (§3–§7), [`tip_mechanics`] (§6–§7: A(v), Williams fields, kink criteria).
+//! The method is described in `docs/solver.md` (overview: `docs/architecture.md`); modules:
+//! [`shape`] (shape functions), [`grid`] and [`particles`] (data), [`sim`] (the time step),
+//! [`material`], [`crack`] (crack fields, contact, motion, J, growth), [`tip_mechanics`] (A(v),
+//! Williams fields, kink criteria).
 //!
 //! The solver does no IO and never logs. Parallel loops use rayon with a deterministic
 //! strip-coloured scatter, so results are bitwise identical for any thread count.

@@ -6,9 +6,10 @@
 //! The scene: two Homalite-100 halves (E = 5.2 GPa, ν = 0.34, ρ = 1230 kg/m³, plane
 //! strain) bonded along y = 27.5 mm (mid-cell), a 15 mm notch along the bond, the impact as a
 //! prescribed x velocity of 23.25 m/s on the struck patch below the notch, growth fixed
-//! along the bond ([1, 0]), 1 mm cells, 30 µs (154 steps). The scene file names the seed's
-//! `wave` rule; the sweep runs it under the product's law, the crack-tip equation of motion
-//! (the test writes the scene with `"speed": "equation_of_motion"` and sweeps that file).
+//! along the bond ([1, 0]), 1 mm cells, 30 µs (154 steps). The sweep runs it under the
+//! product's law, the crack-tip equation of motion, which is also the scene file's default
+//! since it stopped naming the seed's `wave` rule (the test still writes the scene with
+//! `"speed": "equation_of_motion"` and sweeps that file, so it does not depend on the file).
 //! Under the seed's rule the speed is c_L times the share of steps whose raw J1 reaches
 //! J_Ic, so its order in J_Ic hangs on J's transients: once J's kinetic pair was summed by
 //! parts, the stationary notch's J1 at 5.1 µs (the impact wave crossing the ring) read 29.9
