@@ -153,3 +153,13 @@ def test_connection_refused_says_how_to_start_the_server() -> None:
     msg = str(e.value)
     assert f"not running at {url}" in msg
     assert "cargo run --release" in msg and "fracture serve" in msg
+
+
+def test_validate_and_pictures(client: Client, completed_job: Job, tiny_scene: Path) -> None:
+    v = client.validate(tiny_scene)
+    assert v["valid"] is True and v["particles"] == 2400 and v["steps"] > 0
+    png = client.snapshot_png(completed_job, 0, "syy", px_per_cell=2, legend=False)
+    assert png[:8] == b"\x89PNG\r\n\x1a\n"
+    with pytest.raises(ApiError) as e:
+        client.snapshot_png(completed_job, 0, "syy", px_per_cell=-1)
+    assert e.value.status == 400 and e.value.details[0]["path"] == "px_per_cell"

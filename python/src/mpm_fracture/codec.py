@@ -54,8 +54,9 @@ class Snapshot:
             ``(origin[0] + ix*h, origin[1] + iy*h)`` (row 0 is the lowest y). NaN where no
             material touches the node. Units: ``sxx``, ``syy``, ``sxy`` Pa; ``exx``,
             ``eyy``, ``exy`` strain (1); ``vx``, ``vy``, ``speed`` m/s; ``ux``, ``uy`` m;
-            ``fringe`` isochromatic fringe order per metre of thickness (1/m, see the
-            scene's ``fringe_constant``); ``material`` the material's index.
+            ``fringe`` isochromatic fringe order N = t·(σ1 − σ2)/f_s (no unit; t the
+            scene's ``thickness``, f_s its ``output.fringe_constant``); ``material`` the
+            material's index.
         cracks: each crack's line as an ``(n, 2)`` float64 array of points (m).
     """
 
