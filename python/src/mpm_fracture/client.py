@@ -502,6 +502,7 @@ class Client:
         timeout: Optional[float] = None,
         check: bool = False,
         poll: float = 1.0,
+        retry_seconds: float = 120.0,
     ) -> Job:
         """Wait until a job has ended and return it (as ``GET /api/v1/jobs/{id}``).
 
@@ -518,12 +519,30 @@ class Client:
                 on). Default: wait as long as it takes.
             check: raise :class:`JobFailed` if the job ends ``failed`` or ``cancelled``.
             poll: seconds between polls while the stream is unavailable.
+            retry_seconds: while the server does not answer (a restart), keep retrying
+                for this long, then raise :class:`ServerNotRunning`.
         """
         current = self.job(job)  # the state now, not that of an old Job object
         deadline = None if timeout is None else time.monotonic() + timeout
         report = _progress_printer(sys.stderr) if progress is True else progress or None
         if report is not None:
             report(current)
+        down_since: Optional[float] = None
+
+        def server_down(err: ServerNotRunning) -> None:
+            nonlocal down_since
+            now = time.monotonic()
+            if down_since is None:
+                down_since = now
+                if progress is True:
+                    sys.stderr.write(
+                        f"\n{self.url} does not answer ({err.reason}); retrying for up to "
+                        f"{retry_seconds:g} s\n"
+                    )
+            if now - down_since > retry_seconds or (deadline is not None and now > deadline):
+                raise err
+            time.sleep(poll)
+
         while not current.done:
             remaining = None if deadline is None else deadline - time.monotonic()
             if remaining is not None and remaining <= 0:
@@ -546,19 +565,19 @@ class Client:
                         break
                     if deadline is not None and time.monotonic() > deadline:
                         break
-            except ServerNotRunning:
-                if deadline is not None and time.monotonic() > deadline:
-                    raise
-                time.sleep(poll)
+            except ServerNotRunning as err:
+                server_down(err)
+                continue
             except FractureError:
                 # Stream timed out or dropped: look at the job itself, then go on.
                 pass
             if not current.done:
                 try:
                     current = Job(self, self.job(current.id).raw)
-                except ServerNotRunning:
-                    time.sleep(poll)
+                except ServerNotRunning as err:
+                    server_down(err)
                     continue
+                down_since = None
                 if not current.done:
                     time.sleep(min(poll, 0.2))
         final = self.job(current.id)

@@ -266,18 +266,18 @@ class Run:
         ``crack``           --      index into ``scene.cracks`` (interfaces after)
         ``tip``             --      0 start of the polyline, 1 its end
         ``samples``         --      history samples of the tip
-        ``x``, ``y``        m       final position
-        ``initiation_time`` s       when the tip first grew (NaN: never)
-        ``growth``          m       distance the tip moved
+        ``x``, ``y``        m       tip position at the end
+        ``initiation_time`` s       when the tip started to grow (NaN/None: never)
+        ``growth``          m       how far the crack grew at this tip
         ``j1_final``        J/m²    J1 at the last sample
-        ``j1_peak``         J/m²    largest J1
+        ``j1_peak``         J/m²    peak J1
         ``k1_final``        Pa·√m   K_I at the last sample
-        ``k1_peak``         Pa·√m   largest K_I
+        ``k1_peak``         Pa·√m   peak K_I
         ``k2_final``        Pa·√m   K_II at the last sample
-        ``k2_peak``         Pa·√m   largest K_II (by magnitude)
-        ``mean_speed``      m/s     distance moved / time
-        ``peak_speed``      m/s     largest ``speed`` sample
-        ``speed_window``    s       the moving-box window of ``speed``
+        ``k2_peak``         Pa·√m   peak K_II
+        ``mean_speed``      m/s     mean tip speed
+        ``peak_speed``      m/s     peak tip speed
+        ``speed_window``    s       the moving-box window of the speeds
         ==================  ======  ===============================================
 
         Columns the summary adds later appear too; ``null`` reads as NaN.
