@@ -1,7 +1,7 @@
 """Reading a run: the folder ``fracture run SCENE --out DIR`` writes, or a job's results
 downloaded from the service (:meth:`mpm_fracture.Client.run`).
 
-A run folder holds (the project's ``shared/design/run-output.md`` and
+A run folder holds (the project's ``docs/run-output.md`` and
 ``docs/run-output-extensions.md``):
 
 * ``summary.json``: how the run ended, its size and speed, and (newer servers) per-tip
