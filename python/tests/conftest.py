@@ -67,8 +67,8 @@ def server(fracture_bin: Path, tmp_path_factory: pytest.TempPathFactory) -> Iter
         "--workers", "1",
         "--worker-threads", "1",
     ]
-    env = dict(os.environ)
-    env.pop("FRACTURE_TOKEN", None)
+    # The flags above, not a FRACTURE_* setting of the environment (a token, a database).
+    env = {k: v for k, v in os.environ.items() if not k.startswith("FRACTURE_")}
     proc = subprocess.Popen(
         cmd, stdout=log, stderr=subprocess.STDOUT, env=env, start_new_session=True
     )
