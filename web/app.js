@@ -1,5 +1,5 @@
 // Dashboard entry: hash routing (#/runs, #/runs/{id}, #/compare?ids=a,b, #/submit,
-// #/sweeps, #/sweeps/{id}).
+// #/gallery, #/sweeps, #/sweeps/{id}, #/docs/{name}).
 // Each view is a function (main element, route params) that returns a cleanup function.
 
 import { getToken, setToken } from './js/api.js';
@@ -9,6 +9,8 @@ import { runView } from './js/views/run.js';
 import { compareView } from './js/views/compare.js';
 import { submitView } from './js/views/submit.js';
 import { sweepsView, sweepView } from './js/views/sweep.js';
+import { galleryView } from './js/views/gallery.js';
+import { docsView } from './js/views/docs.js';
 
 const main = document.getElementById('main');
 let cleanup = null;
@@ -24,6 +26,8 @@ function route() {
   else if (parts[0] === 'sweeps') view = sweepsView;
   else if (parts[0] === 'compare') view = compareView;
   else if (parts[0] === 'submit') view = submitView;
+  else if (parts[0] === 'gallery') view = galleryView;
+  else if (parts[0] === 'docs') { view = docsView; params = { name: decodeURIComponent(parts[1] || 'scenes') }; nav = 'docs'; }
   else { view = runsView; nav = 'runs'; }
   for (const a of document.querySelectorAll('[data-nav]')) {
     if (a.dataset.nav === nav) a.setAttribute('aria-current', 'page'); else a.removeAttribute('aria-current');

@@ -1,4 +1,4 @@
-// Client of the HTTP API (shared/design/api.md). Every call goes through `request`, which
+// Client of the HTTP API (docs/service.md). Every call goes through `request`, which
 // turns error bodies {error, message, details} into an ApiError.
 
 /** Base path of the API. */
@@ -112,6 +112,8 @@ export const submitJob = (req) => request('POST', '/jobs', { body: req });
 export const listScenes = () => request('GET', '/scenes');
 export const validateScene = (text) => request('POST', '/scenes/validate', { body: text });
 export const listSnapshots = (id) => request('GET', `/jobs/${encodeURIComponent(id)}/snapshots`);
+/** `POST /api/v1/sweeps` with {scene, parameters: {path: [values…]}, name?, labels?, priority?}. */
+export const createSweep = (req) => request('POST', '/sweeps', { body: req });
 
 /** History rows (`crack-tips` or `energy`), optionally only those after `since`. */
 export function history(id, kind, since) {
@@ -136,6 +138,14 @@ export function snapshotUrl(id, index, component, opts = {}, ext = 'png') {
 export function mcapUrl(id) {
   return `${BASE}/jobs/${encodeURIComponent(id)}/fields.mcap`;
 }
+/** The crack path picture: x–y of every tip over time over the body outline (SVG). */
+export function pathSvgUrl(id) {
+  return `${BASE}/jobs/${encodeURIComponent(id)}/path.svg`;
+}
+/** A guide of the repository (`docs/{name}.md`, served as Markdown outside the API). */
+export function docUrl(name) {
+  return `/docs/${encodeURIComponent(name)}.md`;
+}
 /** The snapshots as a zipped VTK series (`fields.pvd` for ParaView). */
 export function vtkUrl(id) {
   return `${BASE}/jobs/${encodeURIComponent(id)}/vtk.zip`;
@@ -148,7 +158,7 @@ export function vtkUrl(id) {
  */
 export function subscribe(id, handlers) {
   const es = new EventSource(`${BASE}/jobs/${encodeURIComponent(id)}/events`);
-  for (const name of ['progress', 'crack_tip', 'energy', 'snapshot', 'status', 'message']) {
+  for (const name of ['progress', 'crack_tip', 'energy', 'snapshot', 'status', 'message', 'restart', 'restarted']) {
     if (!handlers[name]) continue;
     es.addEventListener(name, (ev) => {
       let data = ev.data;

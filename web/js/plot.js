@@ -15,7 +15,8 @@
 // The pure parts (ticks, zoom and pan transforms, nearest sample, thinning, legend state,
 // hover rows) are exported and tested in web/test/plot.test.mjs.
 
-import { h, num, replace, si, siPrefix } from './util.js';
+import { h, num, replace, si, siPrefix, saveBlob } from './util.js';
+import { standaloneSvg, svgToPng, plotFileName } from './download.js';
 
 /** Colour-blind-safe palette (Okabe & Ito) plus a few extra hues. */
 export const PALETTE = ['#0072B2', '#D55E00', '#009E73', '#CC79A7', '#E69F00', '#56B4E9', '#7F3C8D', '#4D4D4D', '#A6761D', '#1B9E77'];
@@ -260,6 +261,8 @@ export class Plot {
     this.root = h('figure', { class: 'plot', id: o.id || this.id },
       h('figcaption', { class: 'plot-head' }, h('span', { class: 'plot-title' }, o.title || ''),
         h('span', { class: 'plot-tools' }, this.reset, this.filterSelect,
+          h('button', { type: 'button', class: 'small secondary plot-dl', 'data-format': 'svg', title: 'Download this plot as SVG (with its legend)', 'aria-label': `${o.title || 'plot'}: download as SVG`, onclick: () => this.download('svg') }, 'SVG'),
+          h('button', { type: 'button', class: 'small secondary plot-dl', 'data-format': 'png', title: 'Download this plot as PNG (twice the size on screen)', 'aria-label': `${o.title || 'plot'}: download as PNG`, onclick: () => this.download('png') }, 'PNG'),
           h('span', { class: 'plot-hint', 'aria-hidden': 'true', title: 'Drag: zoom on time · wheel (click the plot first, or hold Ctrl): zoom · Shift-drag or Shift-wheel: pan · double-click or Escape: reset · legend: show/hide (Shift-click: only this one)' }, '?'))),
       h('div', { class: 'plot-wrap' }, this.svgHost, this.tip),
       this.legend);
@@ -271,6 +274,42 @@ export class Plot {
     });
     this.ro.observe(this.svgHost);
     this.update();
+  }
+
+  /** The first part of downloaded file names (the run's or the page's name). */
+  setFileStem(stem) { this.o.fileStem = stem; }
+
+  /** The plot as a standalone SVG document (styles inline, title and legend included). */
+  svgText() {
+    if (this.frame || !this.svg) { cancelAnimationFrame(this.frame); this.frame = 0; this.render(); }
+    const bg = getComputedStyle(this.root).backgroundColor;
+    return standaloneSvg(this.svg, {
+      background: bg && bg !== 'rgba(0, 0, 0, 0)' ? bg : '#ffffff',
+      title: this.o.title || '',
+      legend: this.series.filter((x) => x.visible && x.xs.length).map((x) => ({ name: x.name, color: x.color, dash: x.dash })),
+    });
+  }
+
+  /** A Blob of the plot: `svg`, or `png` at twice the size. */
+  async blob(format) {
+    const text = this.svgText();
+    return format === 'png' ? svgToPng(text, 2) : new Blob([text], { type: 'image/svg+xml' });
+  }
+
+  /**
+   * Download the plot as `svg` or `png` (`{run}-{title}.{ext}`); the file's name and size
+   * are left on the figure (`data-download`: `name bytes`) for tests and scripts.
+   */
+  async download(format) {
+    try {
+      const b = await this.blob(format);
+      const name = plotFileName(this.o.fileStem, this.o.title, format);
+      this.root.dataset.download = `${name} ${b.size}`;
+      saveBlob(b, name);
+    } catch (e) {
+      this.root.dataset.download = `failed ${e.message}`;
+      console.warn('plot download failed', e);
+    }
   }
 
   /** Stop observing (call when the view goes away). */

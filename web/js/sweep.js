@@ -82,3 +82,69 @@ export function seriesName(label, tip, tipCount, multiCrack) {
   const end = tip.tip === 0 ? 'start tip' : 'end tip';
   return `${label}, ${multiCrack ? `crack ${tip.crack} ${end}` : end}`;
 }
+
+/**
+ * The values of a sweep parameter typed as `25, 100, 250`: each comma-separated item as
+ * JSON when it is JSON (numbers, true/false, null, "quoted text", [arrays] kept whole),
+ * else as text. Throws on an empty list or an empty item.
+ */
+export function parseSweepValues(text) {
+  const items = [];
+  let depth = 0, quote = false, cur = '';
+  for (const ch of String(text ?? '')) {
+    if (quote) { cur += ch; if (ch === '"') quote = false; continue; }
+    if (ch === '"') quote = true;
+    if (ch === '[' || ch === '{') depth++;
+    if (ch === ']' || ch === '}') depth--;
+    if (ch === ',' && depth === 0) { items.push(cur); cur = ''; continue; }
+    cur += ch;
+  }
+  items.push(cur);
+  const out = items.map((s) => s.trim());
+  if (out.length === 1 && out[0] === '') throw new Error('give at least one value');
+  if (out.some((s) => s === '')) throw new Error('a value between commas is empty');
+  return out.map((s) => { try { return JSON.parse(s); } catch { return s; } });
+}
+
+/**
+ * The `parameters` object of `POST /api/v1/sweeps` from form rows [{path, values}] (values as
+ * typed), in the rows' order; rows with neither are skipped. Throws naming the bad row.
+ */
+export function sweepParameters(rows) {
+  const out = {};
+  (rows || []).forEach((r, i) => {
+    const path = String(r.path ?? '').trim();
+    const values = String(r.values ?? '').trim();
+    if (!path && !values) return;
+    if (!path) throw new Error(`parameter ${i + 1}: give its path (e.g. cracks.0.propagation.toughness)`);
+    if (path in out) throw new Error(`parameter ${i + 1}: ${path} is given twice`);
+    try {
+      out[path] = parseSweepValues(values);
+    } catch (e) {
+      throw new Error(`parameter ${i + 1} (${path}): ${e.message}`);
+    }
+  });
+  if (!Object.keys(out).length) throw new Error('give at least one parameter with its values');
+  return out;
+}
+
+/**
+ * Dot paths of the numeric values of a scene (`cracks.0.propagation.toughness`,
+ * `materials.plate.youngs_modulus`, …), for suggestions; at most `max`, vectors (arrays of
+ * numbers, such as points) left out.
+ */
+export function numericPaths(scene, max = 200) {
+  const out = [];
+  const walk = (v, path) => {
+    if (out.length >= max) return;
+    if (typeof v === 'number') { out.push(path.join('.')); return; }
+    if (Array.isArray(v)) {
+      if (v.every((x) => typeof x === 'number')) return;
+      v.forEach((x, i) => walk(x, [...path, String(i)]));
+    } else if (v && typeof v === 'object') {
+      for (const [k, x] of Object.entries(v)) walk(x, [...path, k]);
+    }
+  };
+  walk(scene, []);
+  return out;
+}

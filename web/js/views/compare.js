@@ -89,9 +89,9 @@ export function compareView(main) {
     const xUnit = timeUnit(end);
     if (!refresh) {
       plots = [
-        new Plot(plotGrid, { id: 'cmp-speed', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true, xUnit, filter: 2, empty: 'No crack-tip data in these runs' }),
-        new Plot(plotGrid, { id: 'cmp-length', title: 'Crack length', yLabel: 'crack length', yUnit: 'm', xUnit, empty: 'No crack-tip data in these runs' }),
-        new Plot(plotGrid, { id: 'cmp-j', title: 'J-integral: J1 (solid), J2 (dashed)', yLabel: 'J', yUnit: 'J/m²', xUnit, filter: 0, empty: 'No crack-tip data in these runs' }),
+        new Plot(plotGrid, { id: 'cmp-speed', fileStem: 'compare', title: 'Crack-tip speed', yLabel: 'speed', yUnit: 'm/s', yPrefix: false, yZero: true, xUnit, filter: 2, empty: 'No crack-tip data in these runs' }),
+        new Plot(plotGrid, { id: 'cmp-length', fileStem: 'compare', title: 'Crack length', yLabel: 'crack length', yUnit: 'm', xUnit, empty: 'No crack-tip data in these runs' }),
+        new Plot(plotGrid, { id: 'cmp-j', fileStem: 'compare', title: 'J-integral: J1 (solid), J2 (dashed)', yLabel: 'J', yUnit: 'J/m²', xUnit, filter: 0, empty: 'No crack-tip data in these runs' }),
       ];
       shownKey = list.join(',');
     }

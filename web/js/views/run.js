@@ -1,12 +1,16 @@
 // One run: live while running (Server-Sent Events), complete after. Plots of the crack-tip
 // speed (with wave-speed reference lines), position/length, J, K and the energy balance;
-// field snapshots with a time slider; summary, scene, downloads, cancel/delete.
+// field snapshots with a time slider and a colour-range control; the results summary (per
+// tip, and against the scene's references); the crack-path picture; summary, scene,
+// downloads, cancel/delete; a note when the run was restarted from a checkpoint.
 
 import * as api from '../api.js';
 import { Plot, PALETTE, DASHES } from '../plot.js';
 import { sceneWaveSpeeds, speedRefLines } from '../waves.js';
 import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson, orderScene, etaText, tipLabel, cacheNote } from '../util.js';
 import { wallTime, labelChips } from './runs.js';
+import { COMPONENT_UNITS, rangeApplies, rangeParam, rangeProblem } from '../fields.js';
+import { tipTable, referenceRows } from '../results.js';
 
 const TERMINAL = new Set(['completed', 'failed', 'cancelled']);
 const COMPONENT_ORDER = ['fringe', 'sxx', 'syy', 'sxy', 'von_mises', 'speed', 'vx', 'vy', 'ux', 'uy', 'exx', 'eyy', 'exy', 'material'];
@@ -73,6 +77,9 @@ export function runView(main, { id }) {
   const plotGrid = h('div', { class: 'plot-grid' });
   const snapHost = h('section', { class: 'card', 'aria-labelledby': 'snap-h' });
   const summaryHost = h('section', { class: 'card', 'aria-labelledby': 'sum-h' });
+  const resultsHost = h('section', { class: 'card', id: 'results', 'aria-labelledby': 'results-h', hidden: true });
+  const pathHost = h('section', { class: 'card', id: 'crack-path', 'aria-labelledby': 'path-h', hidden: true });
+  const restartHost = h('div', { id: 'restart-note' });
   const sceneHost = h('section', { class: 'card', 'aria-labelledby': 'scene-h' });
   const downloads = h('section', { class: 'card', 'aria-labelledby': 'dl-h' });
   const messageHost = h('div');
@@ -80,9 +87,10 @@ export function runView(main, { id }) {
   replace(main,
     h('p', { class: 'crumbs' }, h('a', { href: '#/runs' }, '← Runs')),
     h('div', { class: 'page-head' }, h('div', { class: 'title-row' }, titleEl, badgeHost), actions),
-    messageHost, progressHost, metaHost,
+    messageHost, restartHost, progressHost, metaHost,
+    resultsHost,
     h('section', { 'aria-labelledby': 'plots-h' }, h('h2', { id: 'plots-h' }, 'Histories'), plotGrid),
-    snapHost, summaryHost, downloads, sceneHost);
+    h('div', { class: 'fig-row' }, snapHost, pathHost), summaryHost, downloads, sceneHost);
 
   // ---- plots ----------------------------------------------------------------------------
   const tu0 = { factor: 1e-6, unit: 'µs' };
@@ -171,6 +179,7 @@ export function runView(main, { id }) {
       h('button', { type: 'button', class: 'secondary', id: 'rerun-run', onclick: onRerun, title: 'Run the same scene again, with the same name and labels' }, 'Rerun'),
       h('a', { class: 'button secondary', href: `#/compare?ids=${encodeURIComponent(id)}` }, 'Compare…'));
     replace(messageHost, job.message && job.status !== 'completed' ? h('p', { class: job.status === 'failed' ? 'error' : 'notice' }, job.message) : null);
+    renderRestart();
     renderProgress();
     replace(metaHost,
       meta('Id', h('span', { class: 'mono' }, job.id)),
@@ -185,6 +194,44 @@ export function runView(main, { id }) {
       meta('Wall time', duration(wallTime(job))),
       meta('Attempts', String(job.attempts ?? '–')),
       speeds ? meta('Wave speeds', h('span', {}, `${speeds.name} (${speeds.analysis.replace('_', ' ')}): c_L ${num(speeds.speeds.cL, 4)}, c_S ${num(speeds.speeds.cS, 4)}, c_R ${num(speeds.speeds.cR, 4)}, √2·c_S ${num(speeds.speeds.sqrt2cS, 4)} m/s`)) : null);
+  }
+
+  // ---- restarts ---------------------------------------------------------------------------
+  // A job whose worker died goes back to the queue and resumes from its last checkpoint:
+  // its progress falls back. Said from `attempts`, a fall of the progress fraction seen
+  // live, and the stream's restart events (their message as sent).
+  const restarts = []; // texts, newest last
+  let lastFraction = null;
+  function noteRestart(text) {
+    if (!restarts.includes(text)) restarts.push(text);
+    renderRestart();
+  }
+  function renderRestart() {
+    if (!job) return;
+    const k = Number(job.attempts) || 0;
+    const lines = [...restarts];
+    if (!lines.length && k > 1) lines.push(`This run was restarted: attempt ${k}${job.max_attempts ? ` of at most ${job.max_attempts}` : ''} (a worker was lost; the run resumed from its last checkpoint, or from the start without one).`);
+    replace(restartHost, lines.length ? h('p', { class: 'notice', role: 'status' }, h('strong', {}, 'Restarted. '), lines.join(' ')) : null);
+  }
+  function watchFraction(p) {
+    const f = p && Number(p.fraction);
+    if (!Number.isFinite(f)) return;
+    if (lastFraction !== null && f < lastFraction - 1e-9) {
+      noteRestart(`Restarted from checkpoint at ${(f * 100).toFixed(1)} %${job && job.attempts ? ` (attempt ${Number(job.attempts) + (job.status === 'running' ? 0 : 1)})` : ''}: the progress fell back from ${(lastFraction * 100).toFixed(1)} %.`);
+      refreshJob().catch(() => {});
+    }
+    lastFraction = f;
+  }
+  function restartEvent(d) {
+    if (d && typeof d === 'object') {
+      const f = Number(d.fraction ?? (d.progress && d.progress.fraction));
+      const k = d.attempt ?? d.attempts;
+      if (d.message) noteRestart(String(d.message));
+      else if (Number.isFinite(f)) noteRestart(`Restarted from checkpoint at ${(f * 100).toFixed(1)} %${k ? ` (attempt ${k})` : ''}.`);
+      else noteRestart(`Restarted${k ? ` (attempt ${k})` : ''}.`);
+      if (k && job) job.attempts = Math.max(Number(job.attempts) || 0, Number(k));
+    } else if (typeof d === 'string' && d) noteRestart(d);
+    if (Number.isFinite(Number(d && d.fraction))) lastFraction = Number(d.fraction);
   }
 
   function renderProgress() {
@@ -267,6 +314,56 @@ export function runView(main, { id }) {
     }
     replace(summaryHost, h('h2', { id: 'sum-h' }, 'Summary'),
       rows.length ? h('dl', { class: 'meta' }, rows) : h('p', { class: 'muted' }, 'The summary appears when the run ends.'));
+    renderResults();
+  }
+
+  /** The "Results" card: one row per tip and the reference checks (absent for older runs). */
+  function renderResults() {
+    const s = job && job.summary;
+    const table = tipTable(s);
+    const refs = referenceRows(s);
+    resultsHost.hidden = !table && !refs.length;
+    if (resultsHost.hidden) { resultsHost.replaceChildren(); return; }
+    const win = table && table.speedWindow;
+    replace(resultsHost, h('h2', { id: 'results-h' }, 'Results'),
+      table ? h('div', { class: 'results-host' }, h('table', { class: 'results-table', id: 'results-tips' },
+        h('caption', {}, 'Per crack tip. Lengths in mm, times in µs, K in MPa·√m.',
+          win ? ` Peak speed: the advance along the path over ${num(win * 1e6, 3)} µs (the speed window), divided by it; mean speed: growth over the time from initiation to the last advance.` : ''),
+        h('thead', {}, h('tr', {}, h('th', { scope: 'col' }, 'Tip'), table.columns.map((c) => h('th', { scope: 'col' }, c.heading, c.unit ? h('span', { class: 'unit' }, ` (${c.unit})`) : '')))),
+        h('tbody', {}, table.rows.map((r) => h('tr', { 'data-crack': r.tip.crack, 'data-tip': r.tip.tip },
+          h('th', { scope: 'row' }, r.name), r.cells.map((c) => h('td', { class: 'num' }, c))))))) : null,
+      refs.length ? h('div', { class: 'results-host' }, h('table', { class: 'results-table', id: 'results-references' },
+        h('caption', {}, 'Against the scene’s reference values (relative error = (measured − reference) / |reference|).'),
+        h('thead', {}, h('tr', {}, ['Quantity', 'Reference', 'Measured', 'Error', 'Tolerance', '', 'Source'].map((t) => h('th', { scope: 'col' }, t)))),
+        h('tbody', {}, refs.map((r) => h('tr', { 'data-within': r.within === null ? '' : String(r.within) },
+          h('th', { scope: 'row' }, r.quantity, r.where ? h('div', { class: 'muted small-text' }, r.where) : null),
+          h('td', { class: 'num' }, r.value), h('td', { class: 'num' }, r.measured), h('td', { class: 'num' }, r.error),
+          h('td', { class: 'num' }, r.tolerance || '–'),
+          h('td', { class: `check ${r.within === true ? 'ok-mark' : r.within === false ? 'bad-mark' : ''}`, 'aria-label': r.within === true ? 'within the tolerance' : r.within === false ? 'outside the tolerance' : 'no tolerance' }, r.mark),
+          h('td', { class: 'small-text' }, r.source)))))) : null);
+  }
+
+  // ---- crack path -------------------------------------------------------------------------
+  // `path.svg`: x–y of every tip over time over the body outline. Fetched first (a server
+  // without the route, or a run without tips, answers 404: the figure stays hidden).
+  let pathUrl = null;
+  async function loadPath() {
+    if (!job || !job.scene || !Array.isArray(job.scene.cracks) || !job.scene.cracks.length) return;
+    let res;
+    try {
+      res = await api.track(fetch(api.pathSvgUrl(id), { headers: { Accept: 'image/svg+xml' } }));
+    } catch { return; }
+    if (!alive || !res.ok) { pathHost.hidden = true; return; }
+    const blob = await res.blob();
+    if (!alive) return;
+    if (pathUrl) URL.revokeObjectURL(pathUrl);
+    pathUrl = URL.createObjectURL(blob);
+    replace(pathHost, h('h2', { id: 'path-h' }, 'Crack path'),
+      h('figure', { class: 'crack-path' },
+        h('img', { id: 'crack-path-img', src: pathUrl, alt: 'Crack path: x–y of every crack tip over time, over the body outline' }),
+        h('figcaption', { class: 'muted small-text' }, 'Every tip’s path over the run, on the body’s outline. ',
+          h('a', { href: api.pathSvgUrl(id), download: `${job.name || id}-crack-path.svg`, id: 'crack-path-download' }, 'Download SVG'))));
+    pathHost.hidden = false;
   }
 
   function renderScene() {
@@ -305,7 +402,55 @@ export function runView(main, { id }) {
     h('option', { value: '' }, 'auto'), [4, 8, 16].map((n) => h('option', { value: String(n) }, `${n} px per cell`)));
   const snapNote = h('p', { id: 'snap-note', class: 'muted small-text', hidden: true });
   const reports = new Map(); // report URL → promise of the render report
-  const pictureOpts = () => ({ px_per_cell: ppcSel.value });
+  // colour range, remembered per component while on the page
+  const ranges = new Map(); // component → {mode, abs, lo, hi} (input texts)
+  const rangeMode = h('select', { id: 'snap-range-mode', title: 'Colour range of the picture' },
+    h('option', { value: 'auto' }, 'auto'), h('option', { value: 'symmetric' }, 'symmetric ±'), h('option', { value: 'manual' }, 'min – max'));
+  const rangeAbs = h('input', { id: 'snap-range-abs', type: 'text', inputmode: 'decimal', size: 9, placeholder: 'e.g. 2e6', 'aria-label': 'Colour range: ± this value', autocomplete: 'off' });
+  const rangeLo = h('input', { id: 'snap-range-min', type: 'text', inputmode: 'decimal', size: 9, placeholder: 'min', 'aria-label': 'Colour range minimum', autocomplete: 'off' });
+  const rangeHi = h('input', { id: 'snap-range-max', type: 'text', inputmode: 'decimal', size: 9, placeholder: 'max', 'aria-label': 'Colour range maximum', autocomplete: 'off' });
+  const rangeUnit = h('span', { class: 'muted small-text', id: 'snap-range-unit' });
+  const rangeMsg = h('span', { class: 'error small-text', id: 'snap-range-msg', role: 'alert' });
+  const rangeField = h('div', { class: 'field snap-range' }, h('label', { for: 'snap-range-mode' }, 'Colour range'),
+    h('div', { class: 'row' }, rangeMode, h('span', { class: 'range-sym' }, '±', rangeAbs), h('span', { class: 'range-man' }, rangeLo, '–', rangeHi), rangeUnit), rangeMsg);
+  const currentComponent = () => {
+    const s = snapshots[Math.min(Number(slider.value), snapshots.length - 1)];
+    const c = compSel.value;
+    return s && !snapshotComponents(s).includes(c) ? snapshotComponents(s)[0] : c;
+  };
+  const rangeOf = (comp) => ranges.get(comp) || { mode: 'auto', abs: '', lo: '', hi: '' };
+  /** Show the range inputs of the current component (its remembered setting). */
+  function syncRangeInputs() {
+    const comp = currentComponent();
+    const applies = rangeApplies(comp);
+    rangeField.hidden = !applies;
+    const r = rangeOf(comp);
+    rangeMode.value = r.mode;
+    rangeAbs.value = r.abs;
+    rangeLo.value = r.lo;
+    rangeHi.value = r.hi;
+    rangeField.dataset.mode = r.mode;
+    const u = COMPONENT_UNITS[comp];
+    rangeUnit.textContent = r.mode === 'auto' ? '' : (u ? u : '(no unit)');
+    rangeMsg.textContent = rangeProblem(r) && (r.abs || r.lo || r.hi) ? rangeProblem(r) : '';
+  }
+  function onRangeInput() {
+    const comp = currentComponent();
+    if (!comp) return;
+    ranges.set(comp, { mode: rangeMode.value, abs: rangeAbs.value, lo: rangeLo.value, hi: rangeHi.value });
+    syncRangeInputs();
+    showSnapshot();
+  }
+  rangeMode.addEventListener('change', () => {
+    onRangeInput();
+    const first = rangeMode.value === 'symmetric' ? rangeAbs : rangeMode.value === 'manual' ? rangeLo : null;
+    if (first) first.focus();
+  });
+  for (const el of [rangeAbs, rangeLo, rangeHi]) {
+    el.addEventListener('change', onRangeInput);
+    el.addEventListener('keydown', (ev) => { if (ev.key === 'Enter') { ev.preventDefault(); onRangeInput(); } });
+  }
+  const pictureOpts = (comp = currentComponent()) => ({ px_per_cell: ppcSel.value, range: rangeApplies(comp) ? rangeParam(rangeOf(comp)) : '' });
   const img = h('img', { id: 'snap-image', class: 'snap-image', alt: '', hidden: true });
   const snapEmpty = h('p', { class: 'muted' }, 'No field snapshots yet.');
   let following = true; // slider follows the newest snapshot while live
@@ -314,9 +459,10 @@ export function runView(main, { id }) {
       h('div', { class: 'field' }, h('label', { for: 'snap-component' }, 'Field'), compSel),
       h('div', { class: 'field grow' }, h('label', { for: 'snap-slider' }, 'Time ', timeOut), slider),
       h('div', { class: 'field' }, h('label', { for: 'snap-ppc' }, 'Resolution'), ppcSel),
+      rangeField,
       playBtn),
     h('figure', { class: 'snap' }, img, snapEmpty), snapNote);
-  compSel.addEventListener('change', showSnapshot);
+  compSel.addEventListener('change', () => { syncRangeInputs(); showSnapshot(); });
   ppcSel.addEventListener('change', showSnapshot);
   slider.addEventListener('input', () => { following = Number(slider.value) === snapshots.length - 1; stop(); showSnapshot(); });
   playBtn.addEventListener('click', () => (playTimer ? stop() : play()));
@@ -349,7 +495,9 @@ export function runView(main, { id }) {
     let comp = compSel.value;
     if (!snapshotComponents(s).includes(comp)) comp = snapshotComponents(s)[0];
     if (!comp) return;
-    const url = api.snapshotUrl(id, s.index, comp, pictureOpts());
+    const url = api.snapshotUrl(id, s.index, comp, pictureOpts(comp));
+    if (rangeField.hidden === rangeApplies(comp)) syncRangeInputs();
+    img.dataset.range = pictureOpts(comp).range;
     showReport(s, comp);
     timeOut.textContent = `${si(s.time, 's')} (${Number(slider.value) + 1}/${snapshots.length})`;
     slider.setAttribute('aria-valuetext', `t = ${si(s.time, 's')}, snapshot ${Number(slider.value) + 1} of ${snapshots.length}`);
@@ -398,7 +546,8 @@ export function runView(main, { id }) {
         playTimer = setTimeout(step, 500);
       };
       trackPicture(next);
-      next.src = api.snapshotUrl(id, snapshots[i].index, snapshotComponents(snapshots[i]).includes(compSel.value) ? compSel.value : snapshotComponents(snapshots[i])[0], pictureOpts());
+      const c = snapshotComponents(snapshots[i]).includes(compSel.value) ? compSel.value : snapshotComponents(snapshots[i])[0];
+      next.src = api.snapshotUrl(id, snapshots[i].index, c, pictureOpts(c));
     };
     playTimer = setTimeout(step, 300);
   }
@@ -452,7 +601,7 @@ export function runView(main, { id }) {
     // the final state: summary, the last rows, the last snapshots
     try {
       await refreshJob();
-      await Promise.all([fillHistories(), loadSnapshots()]);
+      await Promise.all([fillHistories(), loadSnapshots(), loadPath()]);
       if (alive) fitTimeAxis();
     } catch (e) {
       if (alive) notify(`Could not load the final results: ${e.message}`, 'error');
@@ -462,6 +611,7 @@ export function runView(main, { id }) {
   async function refreshJob() {
     const j = await api.getJob(id);
     if (!alive) return;
+    if (j.progress && j.status === 'running') watchFraction(j.progress);
     job = j;
     renderHeader();
     renderSummary();
@@ -481,6 +631,7 @@ export function runView(main, { id }) {
       progress: (d) => {
         const p = d && d.progress ? d.progress : d;
         if (!p || typeof p !== 'object' || !job) return;
+        watchFraction(p);
         job.progress = p;
         if (job.status === 'queued') setStatus('running');
         renderProgress();
@@ -492,6 +643,9 @@ export function runView(main, { id }) {
         const st = typeof d === 'string' ? d : d && (d.status || (d.job && d.job.status));
         setStatus(st, d && typeof d === 'object' && d.message ? { message: d.message } : {});
       },
+      restart: restartEvent,
+      restarted: restartEvent,
+      message: (d) => { if (d && (typeof d === 'string' || d.message)) noteRestart(typeof d === 'string' ? d : String(d.message)); },
       onopen: () => { if (hadError) { hadError = false; fillHistories().catch(() => {}); } },
       onerror: () => { hadError = true; },
     });
@@ -510,6 +664,8 @@ export function runView(main, { id }) {
     }
     if (!alive) return;
     speeds = sceneWaveSpeeds(job.scene);
+    for (const p of plots) p.setFileStem(job.name || id);
+    if (job.progress) lastFraction = Number(job.progress.fraction);
     const end = (job.scene && job.scene.time && job.scene.time.end) || (job.progress && job.progress.end_time) || 1e-4;
     const tu = timeUnit(end);
     for (const p of plots) { p.setXUnit(tu); p.setXDomain(0, end); }
@@ -531,7 +687,7 @@ export function runView(main, { id }) {
     }
     ready = true;
     for (const f of pending.splice(0)) f();
-    if (TERMINAL.has(job.status)) { finishing = true; fitTimeAxis(); }
+    if (TERMINAL.has(job.status)) { finishing = true; fitTimeAxis(); loadPath(); }
   })();
 
   return () => {
@@ -539,6 +695,7 @@ export function runView(main, { id }) {
     stop();
     clearInterval(pollTimer);
     if (closeEvents) closeEvents();
+    if (pathUrl) URL.revokeObjectURL(pathUrl);
     for (const p of plots) p.destroy();
     document.title = 'mpm-fracture';
   };

@@ -1,9 +1,11 @@
 // New run: start from a built-in example (or a copy of a run), edit the JSON, validate
-// (each error listed with its path and marked at its line), see the run size, submit.
+// (each error listed with its path and marked at its line), see the run size, submit; or
+// start a parameter sweep from the editor's scene or an example (POST /api/v1/sweeps).
 
 import * as api from '../api.js';
 import { h, replace, count, si, parseLabels, hashQuery, notify, prettyJson, orderScene } from '../util.js';
 import { locate, syntaxErrorPosition } from '../jsonlocate.js';
+import { numericPaths, sweepParameters } from '../sweep.js';
 
 export function submitView(main) {
   let alive = true;
@@ -31,7 +33,7 @@ export function submitView(main) {
     h('div', { class: 'field' }, h('label', { for: 'example' }, 'Start from an example'), exampleSel, exampleDesc),
     h('div', { class: 'field' },
       h('label', { for: 'scene-json' }, 'Scene (JSON, SI units)'),
-      h('p', { id: 'editor-help', class: 'muted small-text' }, 'See the scene format in the docs. Tab inserts two spaces; Esc then Tab leaves the editor.'),
+      h('p', { id: 'editor-help', class: 'muted small-text' }, 'See ', h('a', { href: '#/docs/scenes', id: 'scene-guide-link' }, 'the scene format in the scene guide'), '. Tab inserts two spaces; Esc then Tab leaves the editor.'),
       editor),
     result,
     h('div', { class: 'row wrap' },
@@ -39,7 +41,83 @@ export function submitView(main) {
       h('div', { class: 'field narrow' }, h('label', { for: 'priority' }, 'Priority'), prioIn)),
     h('div', { class: 'row wrap' }, validateBtn, formatBtn, submitBtn));
 
-  replace(main, h('div', { class: 'page-head' }, h('h1', {}, 'New run')), form);
+  // ---- sweep form ------------------------------------------------------------------------
+  const sweepBase = h('select', { id: 'sweep-base' }, h('option', { value: '' }, 'the scene in the editor'));
+  const sweepName = h('input', { id: 'sweep-name', type: 'text', placeholder: 'the scene’s name', autocomplete: 'off', spellcheck: false });
+  const sweepRows = h('div', { class: 'sweep-params', id: 'sweep-params' });
+  const pathList = h('datalist', { id: 'sweep-path-list' });
+  const sweepResult = h('div', { id: 'sweep-result', 'aria-live': 'polite' });
+  const sweepBtn = h('button', { type: 'submit', id: 'sweep-submit' }, 'Start sweep');
+  let rowSeq = 0;
+  function paramRow(path = '', values = '') {
+    const n = ++rowSeq;
+    const row = h('div', { class: 'row wrap sweep-param' },
+      h('div', { class: 'field grow' }, h('label', { for: `sweep-path-${n}` }, 'Parameter path'),
+        h('input', { id: `sweep-path-${n}`, class: 'sweep-path mono', type: 'text', list: 'sweep-path-list', value: path, placeholder: 'cracks.0.propagation.toughness', autocomplete: 'off', spellcheck: false })),
+      h('div', { class: 'field grow' }, h('label', { for: `sweep-values-${n}` }, 'Values (comma-separated)'),
+        h('input', { id: `sweep-values-${n}`, class: 'sweep-values mono', type: 'text', value: values, placeholder: '25, 100, 250', autocomplete: 'off', spellcheck: false })),
+      h('button', { type: 'button', class: 'secondary small sweep-remove', 'aria-label': 'Remove this parameter', onclick: () => { row.remove(); if (!sweepRows.children.length) sweepRows.append(paramRow()); } }, 'Remove'));
+    return row;
+  }
+  sweepRows.append(paramRow());
+  const sweepForm = h('form', { class: 'card sweep-form', id: 'sweep-form', 'aria-labelledby': 'sweep-h', onsubmit: (ev) => { ev.preventDefault(); startSweep(); } },
+    h('h2', { id: 'sweep-h' }, 'Start a sweep'),
+    h('p', { class: 'muted small-text' }, 'One run for every combination of the values below, each a copy of the base scene with the parameters set (a dot path into the scene; numbers index arrays). The sweep’s page follows them all.'),
+    h('div', { class: 'row wrap' },
+      h('div', { class: 'field' }, h('label', { for: 'sweep-base' }, 'Base scene'), sweepBase),
+      h('div', { class: 'field grow' }, h('label', { for: 'sweep-name' }, 'Sweep name (optional)'), sweepName)),
+    sweepRows, pathList,
+    h('div', { class: 'row wrap' },
+      h('button', { type: 'button', class: 'secondary', id: 'sweep-add', onclick: () => { const r = paramRow(); sweepRows.append(r); r.querySelector('input').focus(); } }, 'Add parameter'),
+      sweepBtn),
+    sweepResult);
+
+  /** The base scene of the sweep: an example's, or the editor's (parsed; errors shown). */
+  function sweepScene() {
+    const ex = scenes.find((x) => x.name === sweepBase.value);
+    if (ex) return { ...ex.scene, name: ex.scene.name || ex.name };
+    try {
+      return JSON.parse(textarea.value);
+    } catch (e) {
+      throw new Error(`the scene in the editor is not valid JSON (${e.message})`);
+    }
+  }
+
+  function updatePathList() {
+    let scene = null;
+    try { scene = sweepScene(); } catch { /* shown on submit */ }
+    replace(pathList, scene ? numericPaths(scene).map((p) => h('option', { value: p })) : null);
+  }
+  sweepBase.addEventListener('change', updatePathList);
+  sweepForm.addEventListener('focusin', (ev) => { if (ev.target.classList.contains('sweep-path')) updatePathList(); });
+
+  async function startSweep() {
+    let req;
+    try {
+      const rows = [...sweepRows.querySelectorAll('.sweep-param')].map((r) => ({ path: r.querySelector('.sweep-path').value, values: r.querySelector('.sweep-values').value }));
+      req = { scene: sweepScene(), parameters: sweepParameters(rows), priority: Number(prioIn.value) || 0, labels: parseLabels(labelsIn.value) };
+      if (sweepName.value.trim()) req.name = sweepName.value.trim();
+    } catch (e) {
+      replace(sweepResult, h('p', { class: 'error', role: 'alert' }, e.message));
+      return;
+    }
+    sweepBtn.disabled = true;
+    try {
+      const sw = await api.createSweep(req);
+      notify(`Sweep started: ${sw.total ?? ''} runs`);
+      location.hash = `#/sweeps/${encodeURIComponent(sw.id)}`;
+    } catch (e) {
+      if (!alive) return;
+      const details = e.details && e.details.length ? h('ul', { class: 'error-list' }, e.details.map((d) => h('li', {}, h('span', { class: 'mono' }, d.path || '(sweep)'), `: ${d.message}`))) : null;
+      replace(sweepResult, h('div', { class: 'errors', role: 'alert' }, h('p', {}, h('strong', {}, 'Could not start the sweep: '), e.message, e.status === 401 ? ' (set the API token at the top)' : ''), details));
+    } finally {
+      sweepBtn.disabled = false;
+    }
+  }
+
+  replace(main, h('div', { class: 'page-head' }, h('h1', {}, 'New run'),
+    h('div', { class: 'actions' }, h('a', { class: 'button secondary', href: '#/gallery' }, 'Example gallery'), h('a', { class: 'button secondary', href: '#sweep-form', onclick: (ev) => { ev.preventDefault(); sweepForm.scrollIntoView(); sweepForm.querySelector('.sweep-path').focus(); } }, 'Start a sweep'))),
+  form, sweepForm);
 
   // ---- editor: line numbers and error-line highlight kept in step with the textarea -----
   function renderDecor() {
@@ -234,6 +312,12 @@ export function submitView(main) {
     if (!alive) return;
     replace(exampleSel, from ? h('option', { value: '' }, 'copy of a run') : null,
       scenes.map((s) => h('option', { value: s.name }, s.name)));
+    sweepBase.append(...scenes.map((s) => h('option', { value: s.name }, `example: ${s.name}`)));
+    const wanted = hashQuery().get('example');
+    if (hashQuery().get('sweep')) {
+      if (wanted && scenes.some((s) => s.name === wanted)) sweepBase.value = wanted;
+      requestAnimationFrame(() => { sweepForm.scrollIntoView(); const p = sweepForm.querySelector('.sweep-path'); if (p) p.focus({ preventScroll: true }); });
+    }
     if (from) {
       try {
         const job = await api.getJob(from);
@@ -246,7 +330,7 @@ export function submitView(main) {
         notify(`Could not copy run ${from}: ${e.message}`, 'error');
       }
     }
-    const first = scenes.find((s) => (s.scene.cracks || []).length) || scenes[0];
+    const first = scenes.find((s) => s.name === wanted) || scenes.find((s) => (s.scene.cracks || []).length) || scenes[0];
     if (first) {
       exampleSel.value = first.name;
       exampleSel.dispatchEvent(new Event('change'));

@@ -31,7 +31,8 @@ export function sweepsView(main) {
   replace(main,
     h('div', { class: 'page-head' }, h('h1', {}, 'Sweeps')),
     h('p', { class: 'muted' }, 'A sweep runs one scene for every combination of parameter values (',
-      h('code', {}, 'POST /api/v1/sweeps'), ' or ', h('code', {}, 'fracture sweep scene.json --param path=v1,v2'), ').'),
+      h('code', {}, 'POST /api/v1/sweeps'), ' or ', h('code', {}, 'fracture sweep scene.json --param path=v1,v2'), '). ',
+      h('a', { href: '#/submit?sweep=1', id: 'new-sweep-link' }, 'Start a sweep'), ' from the scene editor or an example.'),
     tableHost,
     h('nav', { class: 'pager', 'aria-label': 'Pages' }, prevBtn, nextBtn));
 
@@ -120,6 +121,7 @@ export function sweepView(main, { id }) {
 
   function render() {
     titleEl.textContent = sweep.name || sweep.id;
+    for (const p of [speedPlot, lengthPlot]) p.setFileStem(`sweep ${sweep.name || sweep.id}`);
     document.title = `${sweep.name || sweep.id} · sweep · mpm-fracture`;
     replace(badgeHost, statusBadge(sweep.status));
     const jobs = sweep.jobs || [];
