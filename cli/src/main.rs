@@ -11,7 +11,14 @@ use fracture_cli::{commands, local};
 
 /// Dynamic fracture with the material point method: service and command-line tools.
 #[derive(Parser, Debug)]
-#[command(name = "fracture", version, about)]
+#[command(
+    name = "fracture",
+    version,
+    about,
+    after_help = "First run: `fracture run scenes/center-crack.json --out out/center-crack`.\n\
+Scenes: docs/scenes.md explains every field (units, defaults, examples); \
+`fracture schema` prints the JSON Schema."
+)]
 struct Cli {
     #[command(subcommand)]
     command: Option<Command>,
@@ -28,6 +35,12 @@ enum Command {
     /// Submit a parameter sweep: one job per combination of `--param` values.
     Sweep(commands::SweepArgs),
     /// Run one scene locally, without a server, writing the run directory.
+    #[command(
+        after_help = "The scene format: docs/scenes.md (every field with units and \
+                            defaults; `fracture schema` prints the JSON Schema). OUT gets \
+                            summary.json, crack_tips.csv, energy.csv and fields.mcap \
+                            (docs/run-output.md)."
+    )]
     Run {
         /// Scene JSON file.
         scene: PathBuf,
@@ -43,11 +56,19 @@ enum Command {
         vtk: bool,
     },
     /// Validate a scene and print the size of the run.
+    #[command(
+        after_help = "The scene format: docs/scenes.md; `fracture schema` prints \
+                            the JSON Schema."
+    )]
     Validate {
         /// Scene JSON file.
         scene: PathBuf,
     },
     /// Print the scene JSON Schema.
+    #[command(
+        after_help = "Every field, with units, defaults and worked examples, is \
+                            explained in docs/scenes.md."
+    )]
     Schema,
     /// Benchmarks: throughput (particle-steps per second) and more.
     Bench(fracture_lab::BenchArgs),
