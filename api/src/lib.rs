@@ -21,6 +21,7 @@ pub mod protocol;
 pub mod results;
 pub mod scene;
 pub mod sweep;
+pub mod tips;
 pub mod validate;
 
 pub use scene::Scene;

@@ -339,6 +339,15 @@ pub struct Summary {
     /// status event) small.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub provenance: Option<Box<Provenance>>,
+    /// (extension) What each crack tip did: initiation, growth, final and peak J and K,
+    /// speeds (`docs/run-output-extensions.md`). Empty (omitted) without cracks and in
+    /// summaries written before it.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub tips: Vec<crate::tips::TipSummary>,
+    /// (extension) The scene's `references` compared with the run. Omitted when the scene
+    /// has none.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub references: Vec<crate::tips::ReferenceCheck>,
 }
 
 /// Provenance of a run (`summary.provenance`).

@@ -56,6 +56,80 @@ pub struct Scene {
     /// What is recorded and how often.
     #[serde(default)]
     pub output: Output,
+    /// (extension) Reference values the run's summary compares with (`summary.references`):
+    /// an analytic K, a measured speed, a published growth length. Omitted when empty, so
+    /// scenes without them keep their hash.
+    #[serde(default, skip_serializing_if = "Vec::is_empty")]
+    pub references: Vec<Reference>,
+}
+
+/// (extension) A reference value of one crack tip's result, e.g. Tada's K_I of a centre
+/// crack; the run's summary reports the measured value and the relative error.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+#[serde(deny_unknown_fields)]
+pub struct Reference {
+    /// The quantity compared.
+    pub quantity: ReferenceQuantity,
+    /// The reference value in SI units: J/m² (`j1`), Pa·√m (`k1`, `k2`), m (`growth`),
+    /// m/s (`mean_speed`, `peak_speed`), s (`initiation_time`).
+    pub value: f64,
+    /// Index of the crack (scene cracks first, then interfaces, as `crack_tips.csv`);
+    /// default 0.
+    #[serde(default)]
+    pub crack: u32,
+    /// The tip (0: start of the polyline, 1: its end); absent: the crack's first tip that has
+    /// samples.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tip: Option<u32>,
+    /// Which value of J or K is compared: `final` (the last sample, default), `peak` (the
+    /// largest magnitude) or `late_mean` (the mean over the last 20 % of `time.end`). Ignored
+    /// by the other quantities.
+    #[serde(default)]
+    pub at: ReferenceAt,
+    /// Where the value comes from (free text, e.g. "Tada, Paris & Irwin 2000, eq. 2.1").
+    #[serde(default, skip_serializing_if = "String::is_empty")]
+    pub source: String,
+    /// Relative tolerance (e.g. 0.03 for 3 %): the summary says whether the run is within
+    /// it. Absent: the error is reported, not judged.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub tolerance: Option<f64>,
+}
+
+/// (extension) The quantity of a [`Reference`].
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum ReferenceQuantity {
+    /// J along the crack (J/m²).
+    J1,
+    /// Mode I stress intensity factor (Pa·√m).
+    K1,
+    /// Mode II stress intensity factor (Pa·√m).
+    K2,
+    /// Crack growth at the tip (m).
+    Growth,
+    /// Mean speed while running (m/s).
+    MeanSpeed,
+    /// Peak speed over the summary's speed window (m/s).
+    PeakSpeed,
+    /// Time of initiation (s).
+    InitiationTime,
+}
+
+/// (extension) Which sample of J or K a [`Reference`] compares.
+#[derive(
+    Debug, Clone, Copy, PartialEq, Eq, Default, Serialize, Deserialize, JsonSchema, utoipa::ToSchema,
+)]
+#[serde(rename_all = "snake_case")]
+pub enum ReferenceAt {
+    /// The last sample where the value is defined.
+    #[default]
+    Final,
+    /// The value of largest magnitude.
+    Peak,
+    /// The mean over the last 20 % of the scene's end time.
+    LateMean,
 }
 
 fn default_name() -> String {

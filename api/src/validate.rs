@@ -590,6 +590,55 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
         }
     }
 
+    // A crack or interface drawn where no body is cuts nothing: the run would complete with
+    // no tip rows. Sampled every half cell along the polyline (at most 4096 points a segment).
+    let lines = (scene.cracks.iter().enumerate()).map(|(i, cr)| ("cracks", i, &cr.points));
+    let lines = lines
+        .chain((scene.interfaces.iter().enumerate()).map(|(i, it)| ("interfaces", i, &it.points)));
+    for (kind, i, pts) in lines {
+        if scene.bodies.is_empty() || pts.len() < 2 || !h.is_finite() || h <= 0.0 {
+            continue;
+        }
+        if !polyline_meets_a_body(pts, &scene.bodies, h) {
+            c.err(
+                format!("{kind}.{i}.points"),
+                pts,
+                "lies outside every body: it cuts no material (move it into a body)",
+            );
+        }
+    }
+
+    // Reference values.
+    let lines_count = scene.cracks.len() + scene.interfaces.len();
+    for (i, r) in scene.references.iter().enumerate() {
+        let p = format!("references.{i}");
+        c.finite(&format!("{p}.value"), r.value);
+        if r.crack as usize >= lines_count {
+            c.err(
+                format!("{p}.crack"),
+                r.crack,
+                format!(
+                    "names no crack: the scene has {} cracks and {} interfaces (indices 0..{})",
+                    scene.cracks.len(),
+                    scene.interfaces.len(),
+                    lines_count
+                ),
+            );
+        }
+        if let Some(t) = r.tip
+            && t > 1
+        {
+            c.err(
+                format!("{p}.tip"),
+                t,
+                "must be 0 (polyline start) or 1 (end)",
+            );
+        }
+        if let Some(t) = r.tolerance {
+            c.positive(&format!("{p}.tolerance"), t);
+        }
+    }
+
     // Boundary conditions.
     for (i, bc) in scene.boundary_conditions.iter().enumerate() {
         let p = format!("boundary_conditions.{i}");
@@ -698,4 +747,19 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
     } else {
         Err(ValidationErrors(c.errors))
     }
+}
+
+/// Whether some point of the polyline `pts`, sampled at least every `h / 2`, lies inside one
+/// of `bodies`' regions.
+fn polyline_meets_a_body(pts: &[Vec2], bodies: &[crate::scene::Body], h: f64) -> bool {
+    pts.windows(2).any(|w| {
+        let (a, b) = (w[0], w[1]);
+        let len = (b[0] - a[0]).hypot(b[1] - a[1]);
+        let n = ((2.0 * len / h).ceil() as usize).clamp(1, 4096);
+        (0..=n).any(|k| {
+            let s = k as f64 / n as f64;
+            let q = [a[0] + s * (b[0] - a[0]), a[1] + s * (b[1] - a[1])];
+            bodies.iter().any(|body| body.region.contains(q))
+        })
+    })
 }

@@ -691,6 +691,8 @@ fn summary() -> Summary {
         solver_version: String::new(),
         fracture: None,
         provenance: None,
+        tips: Vec::new(),
+        references: Vec::new(),
     }
 }
 

@@ -334,6 +334,8 @@ fn failed_summary(scene: Option<&Scene>, failure: FailureKind, message: String) 
         provenance: Some(crate::provenance::provenance(
             fracture_api::clock::now_text(),
         )),
+        tips: Vec::new(),
+        references: Vec::new(),
     }
 }
 

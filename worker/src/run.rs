@@ -192,6 +192,8 @@ fn base_summary(scene: &Scene) -> Summary {
         provenance: Some(crate::provenance::provenance(
             fracture_api::clock::now_text(),
         )),
+        tips: Vec::new(),
+        references: Vec::new(),
     }
 }
 

@@ -113,6 +113,8 @@ fn local_output_writes_the_run_output_files() {
         solver_version: "0.1.0".into(),
         fracture: None,
         provenance: None,
+        tips: Vec::new(),
+        references: Vec::new(),
     };
     sink.finish(&summary).unwrap();
 

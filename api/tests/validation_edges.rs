@@ -1,0 +1,83 @@
+//! Validation of the sharp edges a newcomer hits: a crack or interface drawn where no body
+//! is, and reference values that name nothing.
+
+use fracture_api::validate::{scene_from_value, validate};
+use serde_json::{Value, json};
+
+/// A 40 mm plate with a 10 mm centre crack.
+fn plate() -> Value {
+    json!({
+        "grid": {"cell_size": 0.001, "min": [0.0, 0.0], "max": [0.1, 0.05]},
+        "materials": {"m": {"model": "linear_elastic", "density": 1000.0,
+                             "youngs_modulus": 1e9, "poissons_ratio": 0.3}},
+        "bodies": [{"material": "m",
+                    "region": {"rectangle": {"min": [0.005, 0.005], "max": [0.045, 0.045]}}}],
+        "cracks": [{"points": [[0.02, 0.0255], [0.03, 0.0255]]}],
+        "time": {"end": 1e-6}
+    })
+}
+
+/// The problems of `v` as "path: message" lines (empty when it validates).
+fn problems(v: Value) -> Vec<String> {
+    let scene = match scene_from_value(v) {
+        Ok(s) => s,
+        Err(e) => return e.0.iter().map(|e| e.to_string()).collect(),
+    };
+    match validate(&scene) {
+        Ok(_) => Vec::new(),
+        Err(e) => e.0.iter().map(|e| e.to_string()).collect(),
+    }
+}
+
+#[test]
+fn a_crack_in_a_body_validates() {
+    assert_eq!(problems(plate()), Vec::<String>::new());
+    // An edge crack whose mouth lies outside the body still cuts it.
+    let mut v = plate();
+    v["cracks"][0]["points"] = json!([[0.0, 0.0255], [0.02, 0.0255]]);
+    assert_eq!(problems(v), Vec::<String>::new());
+}
+
+#[test]
+fn a_crack_in_empty_space_is_refused_naming_it() {
+    let mut v = plate();
+    // Inside the grid box, right of the plate.
+    v["cracks"] = json!([{"points": [[0.02, 0.0255], [0.03, 0.0255]]},
+                         {"points": [[0.06, 0.0255], [0.09, 0.0255]]}]);
+    let p = problems(v);
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert!(p[0].starts_with("cracks.1.points"), "{p:?}");
+    assert!(p[0].contains("outside every body"), "{p:?}");
+}
+
+#[test]
+fn an_interface_in_empty_space_is_refused_naming_it() {
+    let mut v = plate();
+    v["interfaces"] = json!([{"points": [[0.06, 0.02], [0.09, 0.02]],
+        "cohesive": {"law": "linear",
+                     "normal": {"strength": 1e6, "toughness": 10.0},
+                     "shear": {"strength": 1e6, "toughness": 10.0}}}]);
+    let p = problems(v);
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert!(p[0].starts_with("interfaces.0.points"), "{p:?}");
+}
+
+#[test]
+fn references_are_checked() {
+    let mut v = plate();
+    v["references"] = json!([
+        {"quantity": "k1", "value": 1.0e5, "source": "Tada", "tolerance": 0.03},
+        {"quantity": "k1", "value": 1.0e5, "crack": 2},
+        {"quantity": "growth", "value": 0.01, "tip": 3},
+        {"quantity": "j1", "value": 5.0, "tolerance": -1.0}
+    ]);
+    let p = problems(v);
+    assert_eq!(p.len(), 3, "{p:?}");
+    assert!(p[0].starts_with("references.1.crack"), "{p:?}");
+    assert!(p[1].starts_with("references.2.tip"), "{p:?}");
+    assert!(p[2].starts_with("references.3.tolerance"), "{p:?}");
+    let mut v = plate();
+    v["references"] = json!([{"quantity": "stress", "value": 1.0}]);
+    let p = problems(v);
+    assert!(p.iter().any(|m| m.contains("references")), "{p:?}");
+}
