@@ -214,6 +214,27 @@ pub struct SceneEntry {
     /// The scene document.
     #[schema(value_type = Object)]
     pub scene: serde_json::Value,
+    /// Particles of a run of the scene (validation's count; 0 when the scene does not
+    /// validate). Extension of `api.md`.
+    #[serde(default)]
+    pub particles: u64,
+    /// Time steps to the scene's end time (0 when it does not validate).
+    #[serde(default)]
+    pub steps: u64,
+    /// The work of a run: particles × steps (`fracture_api::cost::particle_steps`).
+    #[serde(default)]
+    pub particle_steps: u64,
+    /// Estimated wall time of the time loop (s): `particle_steps` over
+    /// `estimate_particle_steps_per_second`; absent when the scene does not validate.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimated_wall_seconds: Option<f64>,
+    /// The throughput the estimate assumes (particle-steps per second).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimate_particle_steps_per_second: Option<f64>,
+    /// Where that throughput comes from: `measured` (the mean of this server's completed
+    /// runs) or `nominal` (the documented single-thread figure of `docs/performance.md`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub estimate_basis: Option<String>,
 }
 
 /// The `status` event of a job's event stream (also sent first to a late subscriber).

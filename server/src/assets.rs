@@ -41,6 +41,12 @@ pub fn scenes() -> Vec<SceneEntry> {
                 name,
                 description,
                 scene,
+                particles: 0,
+                steps: 0,
+                particle_steps: 0,
+                estimated_wall_seconds: None,
+                estimate_particle_steps_per_second: None,
+                estimate_basis: None,
             })
         })
         .collect()
@@ -58,7 +64,27 @@ pub fn mime(path: &str) -> &'static str {
         "png" => "image/png",
         "ico" => "image/x-icon",
         "woff2" => "font/woff2",
-        "txt" | "md" => "text/plain; charset=utf-8",
+        "txt" => "text/plain; charset=utf-8",
+        "md" => "text/markdown; charset=utf-8",
         _ => "application/octet-stream",
     }
+}
+
+/// The repository's guides (`docs/*.md`), embedded at build time by `build.rs` (the figures
+/// in `docs/`'s folders are left out).
+mod docs {
+    include!(concat!(env!("OUT_DIR"), "/docs.rs"));
+}
+
+/// The text of the guide `docs/{name}.md`, if there is one.
+pub fn doc(name: &str) -> Option<&'static str> {
+    docs::DOCS
+        .iter()
+        .find(|(n, _)| *n == name)
+        .map(|(_, text)| *text)
+}
+
+/// The names of the embedded guides (without `.md`), sorted.
+pub fn doc_names() -> Vec<&'static str> {
+    docs::DOCS.iter().map(|(n, _)| *n).collect()
 }

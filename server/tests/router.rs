@@ -631,3 +631,111 @@ async fn a_handed_back_claim_is_queued_again_without_counting_the_attempt() {
     assert_eq!(s, StatusCode::OK, "{j}");
     assert_eq!(j["status"], "cancelled", "{j}");
 }
+
+/// `GET /api/v1/scenes`: every example carries its run size (validation's) and an estimated
+/// wall time, first at the documented nominal throughput, then at the mean measured
+/// throughput of the completed runs.
+#[tokio::test]
+async fn scenes_carry_their_size_and_an_estimated_wall_time() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let (s, v) = call(&st, get("/api/v1/scenes")).await;
+    assert_eq!(s, StatusCode::OK);
+    let list = v.as_array().unwrap();
+    assert!(!list.is_empty());
+    let nominal = fracture_server::http::NOMINAL_PARTICLE_STEPS_PER_SECOND;
+    for e in list {
+        let name = e["name"].as_str().unwrap();
+        let (p, n, ps) = (
+            e["particles"].as_u64().unwrap(),
+            e["steps"].as_u64().unwrap(),
+            e["particle_steps"].as_u64().unwrap(),
+        );
+        assert!(p > 0 && n > 0, "{name}: {p} particles, {n} steps");
+        assert_eq!(ps, p * n, "{name}");
+        let est = e["estimated_wall_seconds"].as_f64().unwrap();
+        assert!(
+            (est - ps as f64 / nominal).abs() <= 1e-9 * est,
+            "{name}: {est}"
+        );
+        assert_eq!(e["estimate_particle_steps_per_second"], json!(nominal));
+        assert!(e["estimate_basis"].as_str().unwrap().starts_with("nominal"));
+    }
+    // The same sizes as validation reports for the scene.
+    let first = &list[0];
+    let (s, size) = call(
+        &st,
+        post("/api/v1/scenes/validate", first["scene"].to_string(), None),
+    )
+    .await;
+    if s == StatusCode::OK {
+        assert_eq!(size["particles"], first["particles"]);
+        assert_eq!(size["steps"], first["steps"]);
+    }
+
+    // Two completed runs measured at 2 and 4 M particle-steps/s: the estimate uses 3 M/s.
+    for rate in [2.0e6, 4.0e6] {
+        let body = json!({"scene": scene(), "cache": "force"});
+        let (s, j) = call(&st, post("/api/v1/jobs", body.to_string(), None)).await;
+        assert_eq!(s, StatusCode::CREATED, "{j}");
+        let c = st
+            .store
+            .claim("w", std::time::Duration::ZERO)
+            .await
+            .unwrap()
+            .unwrap();
+        let summary: fracture_api::results::Summary = serde_json::from_value(json!({
+            "status": "completed", "steps": 3, "time_step": 1e-7, "sim_time": 3e-7,
+            "particles": 880, "grid_nodes": 299, "active_nodes_mean": 250.0,
+            "wall_seconds": 0.25, "particle_steps_per_second": rate, "threads": 1,
+            "scene_hash": format!("h{rate}"), "solver_version": "test"}))
+        .unwrap();
+        st.store
+            .finish(&c.job.id, c.job.fence, &summary)
+            .await
+            .unwrap();
+    }
+    let (_, v) = call(&st, get("/api/v1/scenes")).await;
+    let e = &v[0];
+    assert_eq!(e["estimate_particle_steps_per_second"], json!(3.0e6));
+    assert!(
+        e["estimate_basis"]
+            .as_str()
+            .unwrap()
+            .starts_with("measured")
+    );
+    let est = e["estimated_wall_seconds"].as_f64().unwrap();
+    let ps = e["particle_steps"].as_u64().unwrap() as f64;
+    assert!((est - ps / 3.0e6).abs() <= 1e-9 * est, "{est}");
+}
+
+/// `GET /docs/{name}.md` serves the repository's guides as Markdown; anything else is a
+/// 404 in the API's error format (no path escapes `docs/`).
+#[tokio::test]
+async fn docs_route_serves_the_guides_as_markdown() {
+    let dir = tempfile::tempdir().unwrap();
+    let st = state(dir.path(), None).await;
+    let names = fracture_server::assets::doc_names();
+    assert!(names.contains(&"dashboard"), "{names:?}");
+    let (s, h, body) = app::send_raw(&st, get("/docs/dashboard.md")).await;
+    assert_eq!(s, StatusCode::OK);
+    assert!(
+        h["content-type"]
+            .to_str()
+            .unwrap()
+            .starts_with("text/markdown"),
+        "{h:?}"
+    );
+    let text = String::from_utf8(body).unwrap();
+    assert!(text.starts_with("# The web dashboard"), "{text:.80}");
+    for bad in [
+        "/docs/nope.md",
+        "/docs/dashboard",
+        "/docs/..%2FCargo.toml",
+        "/docs/rosakis",
+    ] {
+        let (s, v) = call(&st, get(bad)).await;
+        assert_eq!(s, StatusCode::NOT_FOUND, "{bad}");
+        assert_error_body(&v, "not_found");
+    }
+}

@@ -38,6 +38,8 @@ pub mod security;
 mod sweeps;
 mod worker;
 
+pub use meta::NOMINAL_PARTICLE_STEPS_PER_SECOND;
+
 #[derive(OpenApi)]
 #[openapi(
     info(
@@ -99,6 +101,7 @@ pub fn app(state: AppState) -> Router {
         .routes(routes!(jobs::cancel_job))
         .routes(routes!(jobs::rerun_job))
         .routes(routes!(results::get_crack_tips))
+        .routes(routes!(results::path_svg))
         .routes(routes!(results::get_energy))
         .routes(routes!(results::list_snapshots))
         .routes(routes!(results::snapshot_png))
@@ -128,6 +131,7 @@ pub fn app(state: AppState) -> Router {
         .layer(Extension(BodyLimit(limits.max_worker_body_bytes)));
     let (router, api) = public.merge(worker).split_for_parts();
     router
+        .route("/docs/{file}", axum::routing::get(meta::doc_file))
         .merge(SwaggerUi::new("/api/v1/docs").url("/api/v1/openapi.json", api))
         .method_not_allowed_fallback(method_not_allowed)
         .fallback(static_files)
