@@ -323,6 +323,9 @@ async fn browser_log_errors(c: &Client) -> Vec<String> {
             // the 422 answer to the scene this test gets wrong on purpose is logged by the
             // browser as a failed load; it is the API working as specified
             .filter(|m| !(m.contains("/api/v1/scenes/validate") && m.contains("status of 422")))
+            // a server without the crack-path route answers 404 to `path.svg`: the run page
+            // then hides that figure (checked in `run_page_results`)
+            .filter(|m| !(m.contains("/path.svg") && m.contains("status of 404")))
             .collect(),
         _ => Vec::new(),
     }
@@ -1049,6 +1052,8 @@ async fn run_steps(c: &Client, base: &str) {
     c.execute("const s = document.getElementById('snap-ppc'); s.value = ''; s.dispatchEvent(new Event('change'));", vec![])
         .await
         .expect("back to the automatic resolution");
+    // the issue-39 parts of the run page: colour range, results, crack path, plot files
+    run_page_results(c, &id_a).await;
     // the plots under real mouse and wheel input (WebDriver actions): hover values checked
     // against the API's rows, drag-zoom, wheel zoom, pan, reset, legend toggling
     plot_interaction(c).await;
@@ -1401,4 +1406,347 @@ async fn run_steps(c: &Client, base: &str) {
     )
     .await;
     assert_no_console_errors(c, "sweep navigation").await;
+
+    // 7. a sweep started from the dashboard's form, and the example gallery's one-click run
+    sweep_form(c).await;
+    gallery(c).await;
+}
+
+/// The run page of a completed run with a growing crack: the colour-range control changes
+/// the picture's `range=` (and is remembered per field), the results table has one row per
+/// tip, the crack-path picture (when the server has `path.svg`) shows with its download
+/// link, and every plot's SVG and PNG buttons produce files. Screenshots `run-results.png`
+/// and `crack-path.png`.
+async fn run_page_results(c: &Client, id: &str) {
+    let long = Duration::from_secs(20);
+    // colour range: symmetric ±2 MPa on σxx, then manual on σyy; each field keeps its own
+    wait_js(c, "a stress component", "return [...document.querySelectorAll('#snap-component option')].some(o => o.value === 'sxx');", long).await;
+    let set_field = |comp: &str| {
+        format!(
+            "const s = document.getElementById('snap-component'); s.value = '{comp}'; s.dispatchEvent(new Event('change'));"
+        )
+    };
+    c.execute(&set_field("sxx"), vec![])
+        .await
+        .expect("pick sxx");
+    let auto_src = wait_js(c, "the σxx picture", "const i = document.getElementById('snap-image'); return i.src.includes('/sxx.png') && !document.querySelector('.snap-range').hidden && i.src;", long).await;
+    assert!(
+        !auto_src.as_str().unwrap_or_default().contains("range="),
+        "auto range sends no range: {auto_src}"
+    );
+    c.execute(
+        "const m = document.getElementById('snap-range-mode'); m.value = 'symmetric'; m.dispatchEvent(new Event('change')); \
+         const a = document.getElementById('snap-range-abs'); a.value = '2e6'; a.dispatchEvent(new Event('change'));",
+        vec![],
+    )
+    .await
+    .expect("set a symmetric range");
+    wait_js(c, "the symmetric range in the picture's URL", "const i = document.getElementById('snap-image'); return i.src.includes('/sxx.png') && i.src.includes('range=-2000000%2C2000000') && i.complete && i.naturalWidth > 0;", long).await;
+    c.execute(&set_field("syy"), vec![])
+        .await
+        .expect("pick syy");
+    let syy = wait_js(c, "σyy back at auto", "const i = document.getElementById('snap-image'); return i.src.includes('/syy.png') && document.getElementById('snap-range-mode').value === 'auto' && i.src;", long).await;
+    assert!(
+        !syy.as_str().unwrap_or_default().contains("range="),
+        "{syy}"
+    );
+    c.execute(
+        "const m = document.getElementById('snap-range-mode'); m.value = 'manual'; m.dispatchEvent(new Event('change')); \
+         const lo = document.getElementById('snap-range-min'); lo.value = '-1e6'; lo.dispatchEvent(new Event('change')); \
+         const hi = document.getElementById('snap-range-max'); hi.value = '5e6'; hi.dispatchEvent(new Event('change'));",
+        vec![],
+    )
+    .await
+    .expect("set a manual range");
+    wait_js(c, "the manual range in the picture's URL", "const i = document.getElementById('snap-image'); return i.src.includes('/syy.png') && i.src.includes('range=-1000000%2C5000000') && i.complete && i.naturalWidth > 0;", long).await;
+    c.execute(&set_field("sxx"), vec![])
+        .await
+        .expect("back to sxx");
+    wait_js(c, "σxx keeps its range", "const i = document.getElementById('snap-image'); return i.src.includes('/sxx.png') && i.src.includes('range=-2000000%2C2000000') && document.getElementById('snap-range-mode').value === 'symmetric' && document.getElementById('snap-range-abs').value === '2e6';", long).await;
+    // a bad manual range is said and not sent
+    c.execute(
+        "const m = document.getElementById('snap-range-mode'); m.value = 'manual'; m.dispatchEvent(new Event('change')); \
+         const lo = document.getElementById('snap-range-min'); lo.value = '3'; lo.dispatchEvent(new Event('change')); \
+         const hi = document.getElementById('snap-range-max'); hi.value = '1'; hi.dispatchEvent(new Event('change'));",
+        vec![],
+    )
+    .await
+    .expect("set a bad range");
+    wait_js(c, "the bad range refused", "const i = document.getElementById('snap-image'); return document.getElementById('snap-range-msg').textContent.includes('below') && !i.src.includes('range=');", long).await;
+    c.execute(&set_field("fringe"), vec![])
+        .await
+        .expect("back to the fringes");
+    wait_js(c, "no range control for fringes", "return document.querySelector('.snap-range').hidden && document.getElementById('snap-image').src.includes('/fringe.png');", long).await;
+
+    // the results table: one row per tip of the summary, with units
+    let tips = c
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             fetch('/api/v1/jobs/' + arguments[0]).then(r => r.json()).then(j => done(((j.summary || {}).tips || []).length)).catch(e => done(-1));",
+            vec![json!(id)],
+        )
+        .await
+        .expect("read the summary");
+    let tips = tips.as_i64().unwrap_or(-1);
+    assert!(tips >= 1, "the summary of run {id} has no tips ({tips})");
+    let rows = wait_js(c, "the results table", "const t = document.getElementById('results-tips'); return t && !document.getElementById('results').hidden && t.querySelectorAll('tbody tr').length;", long).await;
+    assert_eq!(rows.as_i64(), Some(tips), "one row per tip");
+    let head = c
+        .execute(
+            "return document.getElementById('results').textContent;",
+            vec![],
+        )
+        .await
+        .expect("the results table text");
+    for want in ["MPa·√m", "mm", "µs", "speed window", "end tip"] {
+        assert!(
+            head.as_str().unwrap_or_default().contains(want),
+            "results table lacks {want}: {head}"
+        );
+    }
+
+    // the crack path: shown when the server has `path.svg`, hidden (no error) when not
+    let path_status = c
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             fetch('/api/v1/jobs/' + arguments[0] + '/path.svg').then(r => done(r.status)).catch(e => done(0));",
+            vec![json!(id)],
+        )
+        .await
+        .expect("ask for path.svg");
+    if path_status == json!(200) {
+        wait_js(c, "the crack-path picture", "const i = document.getElementById('crack-path-img'); return i && !document.getElementById('crack-path').hidden && i.complete && i.naturalWidth > 0 && document.getElementById('crack-path-download').getAttribute('href').endsWith('/path.svg');", long).await;
+    } else {
+        eprintln!("path.svg answered {path_status}: the crack-path figure must stay hidden");
+        let hidden = c
+            .execute(
+                "return document.getElementById('crack-path').hidden;",
+                vec![],
+            )
+            .await
+            .expect("crack-path figure");
+        assert_eq!(hidden, json!(true), "crack-path figure without path.svg");
+    }
+
+    // every plot downloads as SVG and PNG (sizes left on the figure by the page)
+    for (plot, min_svg) in [("plot-speed", 3000), ("plot-energy", 3000)] {
+        for (format, min) in [("svg", min_svg), ("png", 5000)] {
+            c.execute(
+                &format!("document.getElementById('{plot}').removeAttribute('data-download');"),
+                vec![],
+            )
+            .await
+            .expect("clear the download mark");
+            click(c, &format!("#{plot} .plot-dl[data-format={format}]")).await;
+            let got = wait_js(
+                c,
+                &format!("the {format} of {plot}"),
+                &format!("return document.getElementById('{plot}').dataset.download;"),
+                long,
+            )
+            .await;
+            let got = got.as_str().unwrap_or_default().to_string();
+            let (name, size) = got.rsplit_once(' ').unwrap_or(("", "0"));
+            assert!(
+                name.starts_with("e2e-crack-a-") && name.ends_with(&format!(".{format}")),
+                "{plot} {format}: {got}"
+            );
+            assert!(
+                size.parse::<u64>().unwrap_or(0) >= min,
+                "{plot} {format} too small: {got}"
+            );
+        }
+    }
+    // the SVG stands alone: drawn from its own text (no page styles), it has the curves
+    let standalone = c
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             const b = document.querySelector('#plot-speed .plot-dl[data-format=svg]'); \
+             const orig = URL.createObjectURL; let text = null; \
+             URL.createObjectURL = (blob) => { blob.text().then(t => { text = t; }); return orig.call(URL, blob); }; \
+             b.click(); \
+             setTimeout(() => { URL.createObjectURL = orig; \
+               if (!text) { done('no text'); return; } \
+               const doc = new DOMParser().parseFromString(text, 'image/svg+xml'); \
+               const p = doc.querySelector('.series path'); \
+               done([doc.documentElement.nodeName, !!p && /stroke-width/.test(p.getAttribute('style') || ''), /fill:\\s*none/.test(p.getAttribute('style') || ''), text.includes('Crack-tip speed')].join('|')); }, 1000);",
+            vec![],
+        )
+        .await
+        .expect("read the SVG text");
+    assert_eq!(standalone, json!("svg|true|true|true"), "standalone SVG");
+
+    assert_no_console_errors(c, "run page results").await;
+    c.execute(
+        "document.activeElement?.blur(); document.getElementById('results').scrollIntoView();",
+        vec![],
+    )
+    .await
+    .expect("scroll to the results");
+    c.set_window_size(1280, 1000).await.expect("resize window");
+    tokio::time::sleep(Duration::from_millis(600)).await;
+    element_screenshot(c, "#results", "run-results.png").await;
+    if path_status == json!(200) {
+        element_screenshot(c, ".fig-row", "crack-path.png").await;
+    }
+    c.execute("window.scrollTo(0, 0);", vec![])
+        .await
+        .expect("scroll to the top");
+}
+
+/// The sweep form of the New run page: the editor's scene with a toughness parameter of
+/// two values starts a sweep, and the page moves to it.
+async fn sweep_form(c: &Client) {
+    let long = Duration::from_secs(20);
+    c.execute("location.hash = '#/submit?sweep=1';", vec![])
+        .await
+        .expect("open the sweep form");
+    wait_js(
+        c,
+        "the sweep form",
+        "return !!document.getElementById('sweep-form') && document.getElementById('scene-json').value.length > 10 && document.querySelectorAll('#sweep-base option').length > 1;",
+        long,
+    )
+    .await;
+    set_editor(
+        c,
+        &serde_json::to_string_pretty(&small_scene("e2e-form-sweep", 5.0, 0.001)).expect("json"),
+    )
+    .await;
+    // a missing path is said before anything is sent
+    click(c, "#sweep-submit").await;
+    wait_js(
+        c,
+        "the sweep form's complaint",
+        "return document.getElementById('sweep-result').textContent.includes('at least one parameter');",
+        long,
+    )
+    .await;
+    c.execute(
+        "const p = document.querySelector('.sweep-param .sweep-path'); p.value = 'cracks.0.propagation.toughness'; \
+         const v = document.querySelector('.sweep-param .sweep-values'); v.value = '5, 20'; \
+         document.getElementById('sweep-name').value = 'e2e-form-sweep';",
+        vec![],
+    )
+    .await
+    .expect("fill the sweep form");
+    screenshot(c, "sweep-form.png", 1280, 1800).await;
+    c.set_window_size(1280, 900).await.expect("resize window");
+    click(c, "#sweep-submit").await;
+    let hash = wait_js(
+        c,
+        "the new sweep's page",
+        "return /^#\\/sweeps\\/./.test(location.hash) && document.querySelector('h1')?.textContent === 'e2e-form-sweep' && location.hash;",
+        long,
+    )
+    .await;
+    let sweep_id = hash
+        .as_str()
+        .unwrap_or_default()
+        .trim_start_matches("#/sweeps/")
+        .to_string();
+    let sweep = c
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             fetch('/api/v1/sweeps/' + arguments[0]).then(r => r.json()).then(done).catch(e => done(String(e)));",
+            vec![json!(sweep_id)],
+        )
+        .await
+        .expect("read the sweep");
+    assert_eq!(sweep["total"], json!(2), "{sweep}");
+    assert_eq!(
+        sweep["parameters"][0]["path"],
+        json!("cracks.0.propagation.toughness"),
+        "{sweep}"
+    );
+    assert_eq!(sweep["parameters"][0]["values"], json!([5, 20]), "{sweep}");
+    wait_js(
+        c,
+        "the form's sweep completed",
+        "return document.querySelector('.badge-host .badge')?.textContent === 'completed';",
+        RUN_TIMEOUT,
+    )
+    .await;
+    assert_no_console_errors(c, "sweep form").await;
+}
+
+/// The example gallery: every example with its size and estimated wall time; the smallest
+/// one runs with one click and its run page opens and completes. Screenshot `gallery.png`.
+async fn gallery(c: &Client) {
+    let long = Duration::from_secs(60);
+    click(c, "a[data-nav=gallery]").await;
+    let n = wait_js(
+        c,
+        "the gallery",
+        "const cards = [...document.querySelectorAll('.gallery-card')]; \
+         return cards.length > 0 && cards.every(k => Number(k.querySelector('.gallery-estimate').dataset.seconds) > 0 \
+           && /particles × .* steps/.test(k.querySelector('.gallery-size').textContent)) && cards.length;",
+        long,
+    )
+    .await;
+    let listed = c
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             fetch('/api/v1/scenes').then(r => r.json()).then(l => done(l.map(s => [s.name, s.particle_steps, s.estimated_wall_seconds]))).catch(e => done(String(e)));",
+            vec![],
+        )
+        .await
+        .expect("list the scenes");
+    let listed = listed.as_array().cloned().unwrap_or_default();
+    assert_eq!(
+        n.as_u64(),
+        Some(listed.len() as u64),
+        "one card per example"
+    );
+    let basis = c
+        .execute(
+            "return document.getElementById('gallery-basis').textContent;",
+            vec![],
+        )
+        .await
+        .expect("estimate basis");
+    assert!(
+        basis
+            .as_str()
+            .unwrap_or_default()
+            .contains("particle-steps/s"),
+        "{basis}"
+    );
+    c.execute(
+        "document.activeElement?.blur(); document.getElementById('toasts').replaceChildren(); window.scrollTo(0, 0);",
+        vec![],
+    )
+    .await
+    .expect("scroll to the top");
+    screenshot(c, "gallery.png", 1280, 1500).await;
+    c.set_window_size(1280, 900).await.expect("resize window");
+    // one click runs the smallest example and opens its page
+    let smallest = listed
+        .iter()
+        .filter_map(|e| Some((e[0].as_str()?.to_string(), e[1].as_u64()?)))
+        .filter(|(_, ps)| *ps > 0)
+        .min_by_key(|(_, ps)| *ps)
+        .map(|(n, _)| n)
+        .expect("an example");
+    click(c, &format!(".gallery-run[data-name=\"{smallest}\"]")).await;
+    let hash = wait_js(
+        c,
+        "the example's run page",
+        "return /^#\\/runs\\/./.test(location.hash) && location.hash;",
+        long,
+    )
+    .await;
+    wait_js(
+        c,
+        "the example run completed on its page",
+        "return document.querySelector('.badge-host .badge')?.textContent === 'completed';",
+        RUN_TIMEOUT,
+    )
+    .await;
+    let name = c
+        .execute("return document.querySelector('h1').textContent;", vec![])
+        .await
+        .expect("run title");
+    eprintln!("gallery: ran {smallest} as {hash} ({name})");
+    assert_no_console_errors(c, "gallery").await;
 }

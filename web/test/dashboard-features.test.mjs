@@ -118,8 +118,12 @@ test('gallery: estimated wall time as text', () => {
   assert.equal(estimateText(null), '');
   assert.equal(estimateText(undefined), '');
   assert.equal(estimateText(0.2), 'under a second');
-  assert.equal(estimateText(12.3), 'about 12.3 s');
-  assert.equal(estimateText(125), 'about 2 min 05 s');
+  assert.equal(estimateText(2.51), 'about 3 s');
+  assert.equal(estimateText(12.3), 'about 10 s');
+  assert.equal(estimateText(22.2), 'about 20 s');
+  assert.equal(estimateText(177), 'about 3 min 00 s');
+  assert.equal(estimateText(125), 'about 2 min 10 s');
+  assert.equal(splitDescription('An unstressed square flying freely at (5, 2) m/s: ' + 'x '.repeat(120)).lead.endsWith('…'), true);
   const d = splitDescription('Mode I centre crack in a long strip under remote tension (Tada). Homalite-100 (E = 5.2 GPa). More text.');
   assert.equal(d.lead, 'Mode I centre crack in a long strip under remote tension (Tada).');
   assert.equal(d.rest, 'Homalite-100 (E = 5.2 GPa). More text.');

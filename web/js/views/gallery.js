@@ -6,27 +6,29 @@
 import * as api from '../api.js';
 import { h, replace, count, duration, notify, si } from '../util.js';
 
-/** Short text of an estimate: `about 12 s`, `under a second`, '' when unknown. */
+/** Short text of an estimate: `about 10 s`, `under a second`, '' when unknown. */
 export function estimateText(seconds) {
   if (seconds === null || seconds === undefined || !Number.isFinite(Number(seconds))) return '';
   const s = Number(seconds);
   if (s < 1) return 'under a second';
-  return `about ${duration(s)}`;
+  // an estimate: no false precision (whole seconds, then 5 s, then 10 s, then minutes)
+  const r = s < 10 ? Math.round(s) : s < 60 ? Math.round(s / 5) * 5 : s < 3600 ? Math.round(s / 10) * 10 : Math.round(s / 60) * 60;
+  return `about ${duration(r)}`;
 }
 
 /**
  * The description of an example split for its card: `{lead, rest}`, the lead being the
- * first sentence (up to the first '. ' after 20 characters, at most `max` characters,
- * else cut at a word), the rest what follows ('' when nothing does).
+ * first sentence (up to the first '. ' after 20 characters; at most `max` characters, else
+ * cut at a word and marked with …), the rest what follows ('' when nothing does).
  */
 export function splitDescription(text, max = 220) {
   const t = String(text ?? '').trim();
-  const m = t.slice(20).search(/[.;:]\s/);
+  const m = t.slice(20).search(/\.\s/);
   let cut = m < 0 ? t.length : m + 21;
   if (cut > max) { cut = t.lastIndexOf(' ', max); if (cut < 20) cut = max; }
   const lead = t.slice(0, cut).trim();
   const rest = t.slice(cut).trim();
-  return { lead: rest && !/[.;:]$/.test(lead) ? `${lead} …` : lead, rest };
+  return { lead: rest && !/\.$/.test(lead) ? `${lead.replace(/[,;:]$/, '')} …` : lead, rest };
 }
 
 export function galleryView(main) {

@@ -89,6 +89,7 @@ export function submitView(main) {
     replace(pathList, scene ? numericPaths(scene).map((p) => h('option', { value: p })) : null);
   }
   sweepBase.addEventListener('change', updatePathList);
+  sweepForm.addEventListener('input', () => sweepResult.replaceChildren());
   sweepForm.addEventListener('focusin', (ev) => { if (ev.target.classList.contains('sweep-path')) updatePathList(); });
 
   async function startSweep() {
