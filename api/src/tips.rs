@@ -98,8 +98,8 @@ pub struct TipSummary {
     #[schemars(with = "Option<f64>")]
     #[schema(value_type = Option<f64>)]
     pub k2_late_mean: f64,
-    /// Mean speed while running (m/s): the growth over the time from initiation to the last
-    /// sample at which the tip advanced; null when it did not run.
+    /// Mean speed while running (m/s): the advance from the last sample at rest to the last
+    /// sample at which the tip advanced, over that time; null when it did not run.
     #[serde(deserialize_with = "crate::nan::f64_or_nan")]
     #[schemars(with = "Option<f64>")]
     #[schema(value_type = Option<f64>)]
@@ -158,6 +158,8 @@ struct Acc {
     first_length: f64,
     initiation: f64,
     last_growth_time: f64,
+    /// Time of the last sample before initiation (at rest).
+    rest_time: f64,
     length_at_initiation: f64,
     j1_final: f64,
     k1_final: f64,
@@ -189,6 +191,7 @@ impl Acc {
             first_length: row.length,
             initiation: f64::NAN,
             last_growth_time: f64::NAN,
+            rest_time: f64::NAN,
             length_at_initiation: f64::NAN,
             j1_final: f64::NAN,
             k1_final: f64::NAN,
@@ -207,18 +210,16 @@ impl Acc {
         if !self.first_length.is_finite() {
             self.first_length = row.length;
         }
-        let advanced = row.growing
-            || (self.samples > 0
-                && row.length.is_finite()
-                && self.last.length.is_finite()
-                && row.length > self.last.length);
-        if advanced {
+        // The solver's own flag: a stationary crack's length still changes a little as the
+        // body deforms its polyline, which is not growth.
+        if row.growing {
             if self.initiation.is_nan() {
                 self.initiation = row.time;
-                self.length_at_initiation = if self.samples > 0 {
-                    self.last.length
+                // The tip was at rest at the previous sample: the run starts there.
+                (self.rest_time, self.length_at_initiation) = if self.samples > 0 {
+                    (self.last.time, self.last.length)
                 } else {
-                    row.length
+                    (row.time, row.length)
                 };
             }
             self.last_growth_time = row.time;
@@ -232,12 +233,12 @@ impl Acc {
                 *fin = v;
             }
         }
-        if row.j1.is_finite() && !(self.j1_peak >= row.j1) {
+        if row.j1.is_finite() && (self.j1_peak.is_nan() || row.j1 > self.j1_peak) {
             self.j1_peak = row.j1;
         }
         self.k1_peak = peak_abs(self.k1_peak, row.k1);
         self.k2_peak = peak_abs(self.k2_peak, row.k2);
-        if row.time >= late_from {
+        if row.time >= late_from - 1e-9 * late_from.abs() {
             for (k, v) in [row.j1, row.k1, row.k2].into_iter().enumerate() {
                 if v.is_finite() {
                     self.late[k] += v;
@@ -256,7 +257,7 @@ impl Acc {
                 let dt = row.time - t0;
                 if dt >= window * (1.0 - 1e-9) && dt > 0.0 && self.initiation.is_finite() {
                     let v = (row.length - l0) / dt;
-                    if !(self.peak_speed >= v) {
+                    if v.is_finite() && (self.peak_speed.is_nan() || v > self.peak_speed) {
                         self.peak_speed = v;
                     }
                 }
@@ -275,7 +276,7 @@ impl Acc {
             }
         };
         let growth = self.last.length - self.first_length;
-        let running = self.last_growth_time - self.initiation;
+        let running = self.last_growth_time - self.rest_time;
         let mean_speed = if running > 0.0 {
             (self.last.length - self.length_at_initiation) / running
         } else {

@@ -6,7 +6,7 @@
 use std::collections::BTreeMap;
 
 use fracture_api::jobs::JobInfo;
-use fracture_api::results::CrackTipRow;
+use fracture_api::results::{CrackTipRow, Summary};
 use fracture_api::sweep::{SweepInfo, SweepJob, value_text};
 
 /// The speed record of one crack tip over a run.
@@ -131,32 +131,120 @@ pub fn job_summary(job: &JobInfo, tips: &[TipStats], dashboard: &str) -> String 
             ));
         }
     }
-    if tips.is_empty() {
-        s.push_str("  crack tips: none recorded\n");
-    } else {
-        s.push_str("  crack tips (peak speed; mean = distance moved / time):\n");
-        for t in tips {
-            let at = if t.peak_time.is_finite() {
-                format!(" at t = {:.3e} s", t.peak_time)
-            } else {
-                String::new()
-            };
-            // Rows past the scene's cracks are its interfaces' failure fronts (run-output.md).
-            let n_cracks = job.scene.as_ref().map_or(usize::MAX, |sc| sc.cracks.len());
-            let what = match (t.crack as usize).checked_sub(n_cracks) {
-                Some(i) => format!("interface {i} front"),
-                None => format!("crack {} tip {}", t.crack, t.tip),
-            };
-            s.push_str(&format!(
-                "    {what}: peak {}{at}, mean {}, moved {:.3} mm ({} samples)\n",
-                speed(t.peak_speed),
-                speed(t.mean_speed),
-                1e3 * t.travelled,
-                t.samples
-            ));
+    // Rows past the scene's cracks are its interfaces' failure fronts (run-output.md).
+    let n_cracks = job.scene.as_ref().map_or(usize::MAX, |sc| sc.cracks.len());
+    match &job.summary {
+        Some(sum) if !sum.tips.is_empty() => s.push_str(&results_text(sum, n_cracks)),
+        _ if tips.is_empty() => s.push_str("  crack tips: none recorded\n"),
+        _ => {
+            s.push_str("  crack tips (peak speed; mean = distance moved / time):\n");
+            for t in tips {
+                let at = if t.peak_time.is_finite() {
+                    format!(" at t = {:.3e} s", t.peak_time)
+                } else {
+                    String::new()
+                };
+                s.push_str(&format!(
+                    "    {}: peak {}{at}, mean {}, moved {:.3} mm ({} samples)\n",
+                    tip_name(t.crack, t.tip, n_cracks),
+                    speed(t.peak_speed),
+                    speed(t.mean_speed),
+                    1e3 * t.travelled,
+                    t.samples
+                ));
+            }
         }
     }
     s.push_str(&format!("  dashboard: {dashboard}\n"));
+    s
+}
+
+/// "crack C tip T", or "interface I front" for rows past the scene's `n_cracks` cracks.
+fn tip_name(crack: u32, tip: u32, n_cracks: usize) -> String {
+    match (crack as usize).checked_sub(n_cracks) {
+        Some(i) => format!("interface {i} front"),
+        None => format!("crack {crack} tip {tip}"),
+    }
+}
+
+/// `v · scale` with four decimals, `–` when undefined.
+fn num(v: f64, scale: f64) -> String {
+    if v.is_finite() {
+        format!("{:.4}", v * scale)
+    } else {
+        "–".into()
+    }
+}
+
+/// The results of a run (`summary.tips` and `summary.references`), several indented lines
+/// ending in a newline: per tip, K and J (final and peak), initiation, growth and speeds; then
+/// each reference value against the run's. `n_cracks`: the scene's cracks (rows past them
+/// are interface fronts).
+pub fn results_text(sum: &Summary, n_cracks: usize) -> String {
+    let mut s = String::new();
+    let window = sum.tips.first().map_or(0.0, |t| t.speed_window);
+    s.push_str(&format!(
+        "  results (K in MPa·√m, J in J/m²; peak speeds averaged over {:.1} µs):\n",
+        window * 1e6
+    ));
+    for t in &sum.tips {
+        s.push_str(&format!(
+            "    {}: K_I {} (peak {}), K_II {} (peak {}), J1 {} (peak {})\n",
+            tip_name(t.crack, t.tip, n_cracks),
+            num(t.k1_final, 1e-6),
+            num(t.k1_peak, 1e-6),
+            num(t.k2_final, 1e-6),
+            num(t.k2_peak, 1e-6),
+            num(t.j1_final, 1.0),
+            num(t.j1_peak, 1.0),
+        ));
+        if t.initiation_time.is_finite() {
+            s.push_str(&format!(
+                "      initiated at {:.3} µs, grew {:.3} mm, mean {} while running, peak {}; ends at ({:.3}, {:.3}) mm\n",
+                t.initiation_time * 1e6,
+                t.growth * 1e3,
+                speed(t.mean_speed),
+                speed(t.peak_speed),
+                t.x * 1e3,
+                t.y * 1e3
+            ));
+        } else {
+            s.push_str("      did not grow\n");
+        }
+    }
+    if !sum.references.is_empty() {
+        s.push_str("  reference values:\n");
+        for r in &sum.references {
+            let q = serde_json::to_value(r.quantity)
+                .ok()
+                .and_then(|v| v.as_str().map(String::from))
+                .unwrap_or_default();
+            let at = serde_json::to_value(r.at)
+                .ok()
+                .and_then(|v| v.as_str().map(String::from))
+                .unwrap_or_default();
+            let err = if r.relative_error.is_finite() {
+                format!("{:+.2} %", 100.0 * r.relative_error)
+            } else {
+                "–".into()
+            };
+            let verdict = match (r.within, r.tolerance) {
+                (Some(true), Some(t)) => format!(", within {:.3} %", 100.0 * t),
+                (Some(false), Some(t)) => format!(", OUTSIDE {:.3} %", 100.0 * t),
+                _ => String::new(),
+            };
+            let src = if r.source.is_empty() {
+                String::new()
+            } else {
+                format!(" ({})", r.source)
+            };
+            let tip = r.tip.map_or(String::new(), |k| format!(" tip {k}"));
+            s.push_str(&format!(
+                "    {q} ({at}) of crack {}{tip}: {:.6e} against {:.6e}{src}: {err}{verdict}\n",
+                r.crack, r.measured, r.value
+            ));
+        }
+    }
     s
 }
 

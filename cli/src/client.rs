@@ -52,6 +52,37 @@ fn show_error(status: u16, body: &str) -> String {
     }
 }
 
+/// A request error as the user should read it: a refused or failed connection says that no
+/// server answers at that address and how to start one; other errors as they are.
+pub fn explain_send_error(e: reqwest::Error) -> anyhow::Error {
+    if e.is_connect() || e.is_timeout() {
+        let at = e.url().map_or_else(
+            || "the server address".to_string(),
+            |u| {
+                format!(
+                    "{}://{}",
+                    u.scheme(),
+                    u.host_str().map_or_else(String::new, |h| match u.port() {
+                        Some(p) => format!("{h}:{p}"),
+                        None => h.to_string(),
+                    })
+                )
+            },
+        );
+        let what = if e.is_timeout() {
+            "did not answer in time"
+        } else {
+            "is not running (the connection was refused)"
+        };
+        return anyhow::anyhow!(
+            "no fracture server at {at}: it {what}. Start one with `cargo run --release` \
+             (or `fracture serve`) in the project folder, or give the address of a running \
+             one with --server URL (FRACTURE_SERVER)"
+        );
+    }
+    anyhow::Error::new(e)
+}
+
 /// Send a create request (with the bearer token, if any): the body of a `201 Created` answer,
 /// or the status and a readable error for any other answer.
 fn post_created(
@@ -62,7 +93,10 @@ fn post_created(
         Some(t) => req.bearer_auth(t),
         None => req,
     };
-    let r = req.timeout(Duration::from_secs(60)).send()?;
+    let r = req
+        .timeout(Duration::from_secs(60))
+        .send()
+        .map_err(explain_send_error)?;
     let status = r.status();
     let text = r.text()?;
     if status != StatusCode::CREATED {
@@ -175,7 +209,8 @@ fn get_job(http: &Client, base: &str, id: &str) -> anyhow::Result<Option<JobInfo
     let r = http
         .get(format!("{base}/api/v1/jobs/{id}"))
         .timeout(Duration::from_secs(30))
-        .send()?;
+        .send()
+        .map_err(explain_send_error)?;
     if r.status() == StatusCode::NOT_FOUND {
         return Ok(None);
     }
@@ -190,7 +225,8 @@ fn crack_tips(http: &Client, base: &str, id: &str) -> anyhow::Result<Vec<CrackTi
     let r = http
         .get(format!("{base}/api/v1/jobs/{id}/crack-tips"))
         .timeout(Duration::from_secs(60))
-        .send()?;
+        .send()
+        .map_err(explain_send_error)?;
     if !r.status().is_success() {
         anyhow::bail!("GET /api/v1/jobs/{id}/crack-tips answered {}", r.status());
     }

@@ -163,12 +163,78 @@ fn export_vtk(out: &Path) -> bool {
     }
 }
 
-/// `fracture run`; with `vtk`, also the VTK series of its snapshots (`OUT/vtk/`).
-pub fn run(scene: &Path, out: &Path, threads: Parallelism, vtk: bool) -> ExitCode {
+/// Make `out` ready for a run: a missing or empty folder is used as it is; a non-empty one
+/// is refused unless `force`, which removes the files a run writes there
+/// ([`fracture_worker::local::RUN_FILES`]) and names any other file it leaves.
+fn prepare_out(out: &Path, force: bool) -> Result<(), String> {
+    let entries = match std::fs::read_dir(out) {
+        Ok(d) => d,
+        Err(e) if e.kind() == std::io::ErrorKind::NotFound => return Ok(()),
+        Err(e) if out.is_file() => {
+            return Err(format!(
+                "--out {}: is a file, not a folder ({e})",
+                out.display()
+            ));
+        }
+        Err(e) => return Err(format!("--out {}: cannot read it: {e}", out.display())),
+    };
+    let mut names: Vec<String> = entries
+        .filter_map(Result::ok)
+        .map(|e| e.file_name().to_string_lossy().into_owned())
+        .collect();
+    names.sort();
+    if names.is_empty() {
+        return Ok(());
+    }
+    if !force {
+        let shown: Vec<&str> = names.iter().take(6).map(String::as_str).collect();
+        let more = if names.len() > shown.len() {
+            ", …"
+        } else {
+            ""
+        };
+        return Err(format!(
+            "--out {}: the folder is not empty ({}{more}); choose a new folder, or add \
+             --force to replace the previous run's files",
+            out.display(),
+            shown.join(", ")
+        ));
+    }
+    let mut others = Vec::new();
+    for name in names {
+        let path = out.join(&name);
+        if !fracture_worker::local::RUN_FILES.contains(&name.as_str()) {
+            others.push(name);
+            continue;
+        }
+        let removed = if path.is_dir() {
+            std::fs::remove_dir_all(&path)
+        } else {
+            std::fs::remove_file(&path)
+        };
+        removed.map_err(|e| format!("--force: cannot remove {}: {e}", path.display()))?;
+    }
+    if !others.is_empty() {
+        eprintln!(
+            "warning: --out {} keeps files that are not a run's: {}",
+            out.display(),
+            others.join(", ")
+        );
+    }
+    Ok(())
+}
+
+/// `fracture run`; with `vtk`, also the VTK series of its snapshots (`OUT/vtk/`); `force`
+/// replaces a previous run's files in a non-empty `out`.
+pub fn run(scene: &Path, out: &Path, threads: Parallelism, vtk: bool, force: bool) -> ExitCode {
     let scene = match load_scene(scene) {
         Ok(s) => s,
         Err(e) => return e.report(),
     };
+    if let Err(e) = prepare_out(out, force) {
+        eprintln!("error: {e}");
+        return ExitCode::from(EXIT_ERROR);
+    }
     let mut output = match LocalOutput::create(out) {
         Ok(o) => o,
         Err(e) => {
@@ -221,7 +287,19 @@ pub fn run(scene: &Path, out: &Path, threads: Parallelism, vtk: bool) -> ExitCod
                 summary.wall_seconds,
                 summary.particle_steps_per_second
             );
+            if !summary.tips.is_empty() {
+                print!(
+                    "{}",
+                    crate::answers::results_text(&summary, scene.scene().cracks.len())
+                );
+            }
             println!("results in {}", out.display());
+            if !summary.tips.is_empty() {
+                println!(
+                    "crack paths: {}",
+                    out.join(fracture_worker::local::PATH_FILE).display()
+                );
+            }
             if vtk_ok {
                 ExitCode::SUCCESS
             } else {

@@ -54,6 +54,10 @@ enum Command {
         /// (open `OUT/vtk/fields.pvd`; docs/vtk.md).
         #[arg(long)]
         vtk: bool,
+        /// Replace the files of a previous run in a non-empty OUT (without it, a non-empty
+        /// OUT is refused so no run is overwritten or mixed with another's files).
+        #[arg(long)]
+        force: bool,
     },
     /// Validate a scene and print the size of the run.
     #[command(
@@ -90,7 +94,8 @@ fn main() -> ExitCode {
             out,
             threads,
             vtk,
-        }) => local::run(&scene, &out, threads, vtk),
+            force,
+        }) => local::run(&scene, &out, threads, vtk, force),
         Some(Command::Validate { scene }) => local::validate(&scene),
         Some(Command::Schema) => local::schema(),
         Some(Command::Bench(a)) => fracture_lab::bench(a),

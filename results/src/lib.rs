@@ -4,6 +4,7 @@
 //! * [`codec`]: the binary snapshot encoding of worker uploads and the store.
 //! * [`render`]: field snapshots as PNG images (colour maps, isochromatic fringes resolved
 //!   between the nodes, legends with units).
+//! * [`path`]: the crack-path picture (`path.svg`): every tip's x–y path over the bodies.
 //! * [`vtk`]: snapshots as VTK files (ImageData grids, PolyData cracks, `.pvd` time series)
 //!   for ParaView.
 //!
@@ -11,5 +12,6 @@
 
 pub mod codec;
 pub mod mcapfile;
+pub mod path;
 pub mod render;
 pub mod vtk;

@@ -1,5 +1,6 @@
-//! The run directory of a local run (`run-output.md`): `summary.json`, `energy.csv`,
-//! `crack_tips.csv`, `fields.mcap`.
+//! The run directory of a local run (`docs/run-output.md`): `summary.json`, `energy.csv`,
+//! `crack_tips.csv`, `fields.mcap`, and `path.svg` (the crack-path picture) for scenes with
+//! cracks.
 //!
 //! Every batch is written through to the files as it arrives (CSV flushed, MCAP flushed at
 //! each snapshot), so a run that fails or is killed leaves what it had produced.
@@ -15,6 +16,7 @@ use fracture_api::results::{
 
 use crate::{Control, RunSink, SinkError};
 use fracture_results::mcapfile::{McapFileError, McapWriter};
+use fracture_results::path::PathRecorder;
 
 /// File name of the summary.
 pub const SUMMARY_FILE: &str = "summary.json";
@@ -24,6 +26,19 @@ pub const ENERGY_FILE: &str = "energy.csv";
 pub const CRACK_TIPS_FILE: &str = "crack_tips.csv";
 /// File name of the MCAP file.
 pub const FIELDS_FILE: &str = "fields.mcap";
+/// File name of the crack-path picture.
+pub const PATH_FILE: &str = "path.svg";
+/// The files (and folders) a run writes in its directory, what `fracture run --force`
+/// replaces: the four of `run-output.md`, the path picture, and the VTK series.
+pub const RUN_FILES: &[&str] = &[
+    SUMMARY_FILE,
+    ENERGY_FILE,
+    CRACK_TIPS_FILE,
+    FIELDS_FILE,
+    PATH_FILE,
+    "vtk",
+    ".summary.json.tmp",
+];
 
 /// Why the run directory could not be written.
 #[derive(Debug, thiserror::Error)]
@@ -60,6 +75,10 @@ pub struct LocalOutput {
     crack_tips: BufWriter<File>,
     mcap: McapWriter,
     finished: bool,
+    /// The scene, once [`LocalOutput::write_scene`] gave it: `path.svg` is drawn from it.
+    scene: Option<Scene>,
+    /// Every tip's path, for `path.svg`.
+    paths: PathRecorder,
 }
 
 impl LocalOutput {
@@ -100,11 +119,15 @@ impl LocalOutput {
             crack_tips,
             mcap,
             finished: false,
+            scene: None,
+            paths: PathRecorder::new(),
         })
     }
 
     /// Also record the scene in `fields.mcap` (metadata record `scene`).
+    /// It also lets the run's end draw `path.svg` (scenes with cracks or interfaces).
     pub fn write_scene(&mut self, scene: &Scene) -> Result<(), LocalOutputError> {
+        self.scene = Some(scene.clone());
         self.mcap
             .write_scene(scene)
             .map_err(|source| self.mcap_error(source))
@@ -168,6 +191,7 @@ impl RunSink for LocalOutput {
         self.crack_tips
             .flush()
             .map_err(|e| self.io_error(CRACK_TIPS_FILE, e))?;
+        self.paths.extend(rows);
         self.mcap
             .write_crack_tips(rows)
             .map_err(|e| self.mcap_error(e))?;
@@ -196,7 +220,16 @@ impl RunSink for LocalOutput {
             .flush()
             .map_err(|e| self.io_error(CRACK_TIPS_FILE, e));
         let mcap = self.mcap.finish().map_err(|e| self.mcap_error(e));
+        let path = match &self.scene {
+            Some(scene) if !(scene.cracks.is_empty() && scene.interfaces.is_empty()) => {
+                let svg = fracture_results::path::path_svg(scene, self.paths.paths());
+                std::fs::write(self.dir.join(PATH_FILE), svg)
+                    .map_err(|e| self.io_error(PATH_FILE, e))
+            }
+            _ => Ok(()),
+        };
         let summary = self.write_summary(summary);
+        path?;
         energy?;
         tips?;
         mcap?;

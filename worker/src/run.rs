@@ -11,6 +11,7 @@ use fracture_api::results::{
     CrackTipRow, EnergyRow, FailureKind, FractureEnergy, Progress, RunStatus, Snapshot, Summary,
 };
 use fracture_api::scene::FieldKind;
+use fracture_api::tips::{TipSummaryBuilder, check_references};
 use fracture_api::{Scene, ValidScene};
 use fracture_solver::{Simulation, SolverConfig, StepError, StepStats};
 
@@ -280,6 +281,9 @@ struct Loop<'a, M: Model> {
     fields: Vec<FieldKind>,
     energy: Vec<EnergyRow>,
     tips: Vec<CrackTipRow>,
+    /// `summary.tips` from the rows sampled by this loop (a resumed loop sees only the rows
+    /// since the checkpoint: the service rebuilds it from every stored row).
+    summarizer: TipSummaryBuilder,
     snapshots: u32,
     /// Step count at the last history sample (`None`: not sampled yet).
     sampled_at: Option<u64>,
@@ -297,6 +301,7 @@ impl<M: Model> Loop<'_, M> {
                 ))
             })?;
         self.energy.push(e);
+        self.summarizer.extend(&tips);
         self.tips.extend(tips);
         self.sampled_at = Some(self.model.steps_taken());
         Ok(())
@@ -411,6 +416,7 @@ pub(crate) fn run_model<M: Model>(
         fields: out.fields.clone(),
         energy: Vec::new(),
         tips: Vec::new(),
+        summarizer: TipSummaryBuilder::new(scene),
         snapshots: 0,
         sampled_at: None,
     };
@@ -527,6 +533,8 @@ pub(crate) fn run_model<M: Model>(
     summary.steps = lp.model.steps_taken();
     summary.sim_time = lp.model.time();
     summary.fracture = lp.model.fracture_energy();
+    summary.tips = lp.summarizer.finish();
+    summary.references = check_references(&scene.references, &summary.tips);
     summary.wall_seconds = wall;
     summary.particle_steps_per_second = if wall > 0.0 {
         summary.particles as f64 * active_steps as f64 / wall

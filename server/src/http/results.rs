@@ -97,6 +97,42 @@ pub(super) async fn get_crack_tips(
     }
 }
 
+/// The crack-path picture (`path.svg` of a run folder): the bodies' outlines, the scene's
+/// cracks and interfaces, and the x–y path of every crack tip over time, coloured by time.
+/// Drawn from the rows stored so far, so it grows while the job runs.
+#[utoipa::path(get, path = "/api/v1/jobs/{id}/path.svg", tag = "results",
+    params(("id" = String, Path, description = "Job id")),
+    responses((status = 200, description = "An SVG picture (`image/svg+xml`)", content_type = "image/svg+xml", body = String),
+        (status = 404, description = "Unknown id, or a scene without cracks or interfaces", body = ErrorBody)))]
+pub(super) async fn path_svg(
+    State(st): State<AppState>,
+    Path(id): Path<String>,
+) -> Result<Response, ApiError> {
+    let (job, src) = results_of(&st, &id).await?;
+    let scene: fracture_api::Scene =
+        serde_json::from_str(&job.scene).map_err(ApiError::internal)?;
+    if scene.cracks.is_empty() && scene.interfaces.is_empty() {
+        return Err(ApiError::NotFound(format!(
+            "job `{id}` has no cracks or interfaces: there is no crack path to draw"
+        )));
+    }
+    let rows = st.store.crack_tips(&src, None).await?;
+    let svg = blocking(move || {
+        let mut paths = fracture_results::path::PathRecorder::new();
+        paths.extend(&rows);
+        Ok(fracture_results::path::path_svg(&scene, paths.paths()))
+    })
+    .await?;
+    Ok((
+        [
+            (header::CONTENT_TYPE, "image/svg+xml".to_string()),
+            (header::CACHE_CONTROL, "no-store".to_string()),
+        ],
+        svg,
+    )
+        .into_response())
+}
+
 /// Energy history (`energy.csv` rows), JSON or CSV (`Accept: text/csv`).
 #[utoipa::path(get, path = "/api/v1/jobs/{id}/energy", tag = "results",
     params(("id" = String, Path, description = "Job id"), SinceQuery),

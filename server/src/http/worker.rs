@@ -240,7 +240,18 @@ pub(super) async fn worker_finish(
         Ok(())
     })
     .await?;
-    let row = st.store.finish(&id, f.fence, &f.summary).await?;
+    let mut summary = f.summary;
+    // `summary.tips` from every stored row: a worker that resumed from a checkpoint saw only
+    // the rows since it (the rows are the record; the summary is a function of them).
+    if let Ok(scene) = serde_json::from_str::<fracture_api::Scene>(&current.scene)
+        && !(scene.cracks.is_empty() && scene.interfaces.is_empty())
+    {
+        let rows = st.store.crack_tips(&id, None).await?;
+        let (tips, references) = fracture_api::tips::summarize(&scene, &rows);
+        summary.tips = tips;
+        summary.references = references;
+    }
+    let row = st.store.finish(&id, f.fence, &summary).await?;
     // The run is over: nothing will resume from its checkpoint.
     super::checkpoint::remove_after_finish(&st, &id).await;
     tracing::info!(job = %id, status = row.status.as_str(), "finished");
