@@ -1407,7 +1407,9 @@ async fn run_steps(c: &Client, base: &str) {
     .await;
     assert_no_console_errors(c, "sweep navigation").await;
 
-    // 7. a sweep started from the dashboard's form, and the example gallery's one-click run
+    // 7. the editor's link to the scene guide, a sweep started from the dashboard's form,
+    //    and the example gallery's one-click run
+    scene_guide(c).await;
     sweep_form(c).await;
     gallery(c).await;
 }
@@ -1592,6 +1594,42 @@ async fn run_page_results(c: &Client, id: &str) {
     c.execute("window.scrollTo(0, 0);", vec![])
         .await
         .expect("scroll to the top");
+}
+
+/// The editor's "scene format" link opens the scene guide (`docs/scenes.md`, served at
+/// `/docs/scenes.md`) rendered in the dashboard. Screenshot `docs-scenes.png`.
+async fn scene_guide(c: &Client) {
+    let long = Duration::from_secs(20);
+    c.execute("location.hash = '#/submit';", vec![])
+        .await
+        .expect("open the editor");
+    click(c, "#scene-guide-link").await;
+    let title = wait_js(
+        c,
+        "the rendered scene guide",
+        "const b = document.getElementById('doc-body'); \
+         return location.hash === '#/docs/scenes' && b && b.querySelector('h1') && b.querySelectorAll('h2').length > 2 && b.querySelector('h1').textContent;",
+        long,
+    )
+    .await;
+    eprintln!("scene guide: {title}");
+    let raw = c
+        .execute_async(
+            "const done = arguments[arguments.length - 1]; \
+             const a = document.getElementById('doc-raw'); \
+             fetch(a.href).then(r => r.text().then(t => done(r.status + '|' + r.headers.get('content-type') + '|' + t.startsWith('#')))).catch(e => done(String(e)));",
+            vec![],
+        )
+        .await
+        .expect("fetch the guide's Markdown");
+    assert_eq!(
+        raw,
+        json!("200|text/markdown; charset=utf-8|true"),
+        "the guide's Markdown"
+    );
+    assert_no_console_errors(c, "scene guide").await;
+    screenshot(c, "docs-scenes.png", 1280, 1100).await;
+    c.set_window_size(1280, 900).await.expect("resize window");
 }
 
 /// The sweep form of the New run page: the editor's scene with a toughness parameter of

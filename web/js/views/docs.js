@@ -13,7 +13,7 @@ export function docsView(main, { name: raw }) {
   replace(main,
     h('p', { class: 'crumbs' }, h('a', { href: '#/submit' }, '← New run'), ' · ', h('a', { href: '#/gallery' }, 'Examples')),
     h('div', { class: 'page-head' }, h('h1', { class: 'visually-hidden' }, `Guide: ${name}`),
-      h('a', { class: 'button secondary', id: 'doc-raw', href: docUrl(name), download: `${name}.md` }, `${name}.md`)),
+      h('a', { class: 'button secondary', id: 'doc-raw', href: docUrl(name), download: `${name}.md`, title: 'The guide as Markdown' }, `Markdown: ${name}.md`)),
     body);
   (async () => {
     let text;
