@@ -19,7 +19,10 @@ pub enum JobEvent {
     /// `snapshot`: a new snapshot is readable.
     Snapshot(SnapshotInfo),
     /// `status`: the job changed state.
-    Status(StatusEvent),
+    Status(Box<StatusEvent>),
+    /// `restart` (extension): a new attempt resumes the job from its checkpoint (or from
+    /// the start): `{attempt, progress, message}`.
+    Restart(crate::store::Restart),
 }
 
 impl JobEvent {
@@ -31,6 +34,7 @@ impl JobEvent {
             JobEvent::CrackTips(_) => "crack_tip",
             JobEvent::Snapshot(_) => "snapshot",
             JobEvent::Status(_) => "status",
+            JobEvent::Restart(_) => "restart",
         }
     }
     /// SSE data (JSON).
@@ -41,6 +45,7 @@ impl JobEvent {
             JobEvent::CrackTips(r) => serde_json::to_string(r),
             JobEvent::Snapshot(s) => serde_json::to_string(s),
             JobEvent::Status(s) => serde_json::to_string(s),
+            JobEvent::Restart(r) => serde_json::to_string(r),
         };
         r.unwrap_or_else(|_| "null".into())
     }

@@ -56,7 +56,8 @@ impl AppState {
 
     /// Announce a job's new state on its stream (and wake claimers if it is queued).
     pub fn announce(&self, job: &JobRow) {
-        self.hub.send(&job.id, JobEvent::Status(job.status_event()));
+        self.hub
+            .send(&job.id, JobEvent::Status(Box::new(job.status_event())));
         if job.status == JobStatus::Queued {
             self.queue_changed.notify_waiters();
         }

@@ -815,10 +815,19 @@ async fn hand_back_and_rewind_history(store: Store) {
         store.rewind_history(&h, f1, LEASE, Some(keep)).await,
         Err(StoreError::Fenced)
     ));
-    store
+    let note = store
         .rewind_history(&h, f2, LEASE, Some(keep))
         .await
+        .unwrap()
         .unwrap();
+    // Resumed at the checkpoint: the progress says so (the job's end time is unknown here:
+    // no progress was ever reported), and the message names the cause of the hand-back.
+    assert_eq!((note.progress.step, note.progress.sim_time), (20, 2e-6));
+    assert!(
+        note.message.contains("(handed back (SIGUSR1))"),
+        "{}",
+        note.message
+    );
     let left: Vec<f64> = store
         .energy(&h, None)
         .await
@@ -832,7 +841,7 @@ async fn hand_back_and_rewind_history(store: Store) {
     assert!(
         j.message
             .as_deref()
-            .is_some_and(|m| m.starts_with("resumed from its checkpoint at step 20")),
+            .is_some_and(|m| m.starts_with("attempt 1: resumed from its checkpoint at step 20")),
         "{:?}",
         j.message
     );

@@ -20,7 +20,7 @@ use crate::checkpoints::{self, Found};
 use crate::error::{ApiError, ApiQuery, RawBody};
 use crate::files::Record;
 use crate::server::AppState;
-use crate::store::HistoryCursor;
+use crate::store::{HistoryCursor, Restart};
 
 /// Query of a checkpoint upload: the claim and where the checkpoint stands.
 #[derive(Debug, Deserialize, utoipa::IntoParams)]
@@ -151,7 +151,7 @@ pub(super) async fn start_claim(
     id: &str,
     fence: i64,
     scene: &str,
-) -> Result<Option<HistoryCursor>, ApiError> {
+) -> Result<Option<Restart>, ApiError> {
     let _g = checkpoints::LOCK.lock().await;
     let dir = st.files.dir(id);
     let found = blocking(move || checkpoints::read(&dir).map_err(|e| ApiError::io(&e))).await;
@@ -169,14 +169,15 @@ pub(super) async fn start_claim(
             None
         }
     };
-    st.store
+    let restart = st
+        .store
         .rewind_history(id, fence, st.cfg.lease, keep)
         .await?;
     restart_file(st, id, fence, scene, keep).await?;
-    if let Some(k) = keep {
-        tracing::info!(job = %id, step = k.step, "resuming from its checkpoint");
+    if let Some(r) = &restart {
+        tracing::info!(job = %id, attempt = r.attempt, "{}", r.message);
     }
-    Ok(keep)
+    Ok(restart)
 }
 
 /// Open the job's MCAP file afresh under `fence` and write into it the history kept from

@@ -39,7 +39,7 @@ pub(super) async fn job_events(
     if let Some(p) = job.progress {
         first.push(sse(&JobEvent::Progress(p)));
     }
-    first.push(sse(&JobEvent::Status(job.status_event())));
+    first.push(sse(&JobEvent::Status(Box::new(job.status_event()))));
     let done = job.status.is_terminal();
     let shutdown = st.shutdown.clone();
     let live = futures::stream::unfold((rx, shutdown, done), |(mut rx, mut sd, done)| async move {

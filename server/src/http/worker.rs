@@ -51,7 +51,18 @@ pub(super) async fn worker_claim(
             // without one), and the MCAP file restarted with it (`checkpoint.rs`). A file
             // that cannot be created (a full disk) is given up, not the claim: the run's
             // rows go to the database all the same.
-            super::checkpoint::start_claim(&st, &job.id, job.fence, &job.scene).await?;
+            let restart =
+                super::checkpoint::start_claim(&st, &job.id, job.fence, &job.scene).await?;
+            // A restarted job's subscribers learn where it resumes and why its progress fell
+            // back: the `restart` event, then the status with the job's new message.
+            let job = match &restart {
+                Some(r) => {
+                    st.hub.send(&job.id, JobEvent::Restart(r.clone()));
+                    st.hub.send(&job.id, JobEvent::Progress(r.progress));
+                    st.store.get(&job.id).await?.unwrap_or(job)
+                }
+                None => job,
+            };
             let text = job.scene.clone();
             // A scene this version cannot read still goes to the worker, which fails the
             // job with the diagnosis.

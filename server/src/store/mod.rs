@@ -87,7 +87,7 @@ mod results;
 mod sweeps;
 
 pub use jobs::{JobRow, ListFilter, NewJob, RunningJob, StoreMetrics};
-pub use queue::{Claimed, HistoryCursor};
+pub use queue::{Claimed, HistoryCursor, Restart};
 pub use sweeps::{NewSweep, NewSweepJob, SweepRow};
 
 /// Errors of the store.

@@ -171,23 +171,36 @@ impl Store {
     /// The history a new claim under `fence` starts from: the rows and snapshots of earlier
     /// attempts are deleted, all of them, or with a checkpoint to resume from only those
     /// after it (`keep`: rows at times ≤ `time` and snapshots with index < `snapshots`
-    /// stay). With a checkpoint, the job's message says where it resumes. Fenced.
+    /// stay). Fenced. A claim after an earlier attempt (a lost worker, a hand-back) also
+    /// rewinds the job's progress to where it resumes and says so in its message
+    /// (`restart` of [`Restart`]); that note is returned, `None` for a first attempt.
     pub async fn rewind_history(
         &self,
         id: &str,
         fence: i64,
         lease: Duration,
         keep: Option<HistoryCursor>,
-    ) -> Result<(), StoreError> {
+    ) -> Result<Option<Restart>, StoreError> {
         let mut tx = self.db.begin().await?;
         Self::fence_check(&mut tx, id, fence, lease).await?;
+        let before = on_tx!(&mut tx, c => sqlx::query(
+            "SELECT progress, message, attempts FROM jobs WHERE id = $1",
+        )
+        .bind(id)
+        .fetch_optional(c)
+        .await?
+        .map(|r| -> Result<_, StoreError> {
+            Ok((
+                r.opt_json::<Progress>("progress")?,
+                r.opt_text("message")?,
+                u32::try_from(r.int("attempts")?).unwrap_or(0),
+            ))
+        })
+        .transpose()?);
+        let (progress, cause, attempts) = before.unwrap_or((None, None, 0));
         match keep {
             None => delete_job_rows(&mut tx, id).await?,
             Some(k) => {
-                let message = format!(
-                    "resumed from its checkpoint at step {} (t = {:e} s)",
-                    k.step, k.time
-                );
                 on_tx!(&mut tx, c => {
                     for sql in [
                         "DELETE FROM energy WHERE job_id = $1 AND time > $2",
@@ -200,16 +213,24 @@ impl Store {
                         .bind(i64::from(k.snapshots))
                         .execute(&mut *c)
                         .await?;
-                    sqlx::query("UPDATE jobs SET message = $1 WHERE id = $2")
-                        .bind(&message)
-                        .bind(id)
-                        .execute(&mut *c)
-                        .await?;
                 });
             }
         }
+        let restart = Restart::after(attempts, progress, cause.as_deref(), keep);
+        if let Some(r) = &restart {
+            let p = to_json("progress", &r.progress)?;
+            on_tx!(&mut tx, c => sqlx::query(
+                "UPDATE jobs SET message = $1, progress = $2 WHERE id = $3",
+            )
+            .bind(&r.message)
+            .bind(p)
+            .bind(id)
+            .execute(c)
+            .await
+            .map(|_| ())?);
+        }
         tx.commit().await?;
-        Ok(())
+        Ok(restart)
     }
 
     /// Extend the lease of a job running under `fence` (the first statement of a fenced
@@ -453,5 +474,78 @@ impl Store {
         .await?)?);
         tx.commit().await?;
         Ok(rows)
+    }
+}
+
+/// Where a job's new attempt starts, after an earlier one ended unfinished: the progress it
+/// resumes at, and a message that says so (the job's `message` and the `restart` event).
+#[derive(Debug, Clone, PartialEq, serde::Serialize)]
+pub struct Restart {
+    /// The attempt starting (2 for the first restart).
+    pub attempt: u32,
+    /// The progress it starts from (the checkpoint's; 0 without one).
+    pub progress: Progress,
+    /// Where it resumes from, how far the previous attempt got, and why it stopped.
+    pub message: String,
+}
+
+impl Restart {
+    /// The restart of attempt `attempt` (after the claim's increment; `None` for a first
+    /// attempt that starts from nothing),
+    /// whose previous attempt reached `before` with `cause` as the job's message, resuming
+    /// from `keep` (from the start without one).
+    pub fn after(
+        attempt: u32,
+        before: Option<Progress>,
+        cause: Option<&str>,
+        keep: Option<HistoryCursor>,
+    ) -> Option<Restart> {
+        if attempt < 2 && keep.is_none() {
+            return None;
+        }
+        let end = before.map_or(f64::NAN, |p| p.end_time);
+        let pct = |f: f64| format!("{:.0} %", 100.0 * f);
+        let (progress, from) = match keep {
+            Some(k) => {
+                let fraction = if end > 0.0 && k.time.is_finite() {
+                    (k.time / end).clamp(0.0, 1.0)
+                } else {
+                    0.0
+                };
+                (
+                    Progress {
+                        step: k.step,
+                        sim_time: k.time,
+                        end_time: if end.is_finite() { end } else { 0.0 },
+                        fraction,
+                    },
+                    format!(
+                        "resumed from its checkpoint at step {} (t = {:e} s, {} of the end time)",
+                        k.step,
+                        k.time,
+                        pct(fraction)
+                    ),
+                )
+            }
+            None => (
+                Progress {
+                    end_time: if end.is_finite() { end } else { 0.0 },
+                    ..Progress::default()
+                },
+                "restarted from the beginning (no checkpoint)".to_string(),
+            ),
+        };
+        let reached = before.map_or(String::new(), |p| {
+            format!(" after the previous attempt stopped at {}", pct(p.fraction))
+        });
+        // A previous restart note is not a cause; the release's reason is.
+        let why = cause
+            .filter(|c| !c.is_empty() && !c.starts_with("attempt ") && !c.starts_with("resumed "))
+            .map_or(String::new(), |c| format!(" ({c})"));
+        Some(Restart {
+            attempt,
+            progress,
+            message: format!("attempt {attempt}: {from}{reached}{why}"),
+        })
     }
 }
