@@ -436,6 +436,23 @@ pub struct Snapshot {
     pub components: Vec<FieldComponent>,
     /// Each crack's line as a polyline (m).
     pub cracks: Vec<Vec<[f64; 2]>>,
+    /// (extension) The particles at that time, with the same components per particle, when
+    /// the scene asks for them (`output.particles`). Absent otherwise.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub particles: Option<ParticleSnapshot>,
+}
+
+/// (extension) The particles of a snapshot: positions and the snapshot's components at
+/// each particle (no averaging). Particles are in the solver's order at that time (it
+/// re-sorts them), so index k need not be the same particle in two snapshots.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+pub struct ParticleSnapshot {
+    /// Positions x (m).
+    pub x: Vec<f32>,
+    /// Positions y (m).
+    pub y: Vec<f32>,
+    /// The components, one value per particle (names as the grid's).
+    pub components: Vec<FieldComponent>,
 }
 
 impl Snapshot {

@@ -836,6 +836,11 @@ pub struct Output {
     /// Width of the moving-box average of the crack-tip speed (s).
     #[serde(default = "default_speed_window")]
     pub speed_window: f64,
+    /// (extension) Also record every particle (position and the `fields`' components) in
+    /// each snapshot, for the VTK export's `.vtu` particle files. Off by default: a
+    /// particle snapshot is about 8 bytes per particle and component.
+    #[serde(default, skip_serializing_if = "std::ops::Not::not")]
+    pub particles: bool,
 }
 
 fn default_fields() -> Vec<FieldKind> {
@@ -853,6 +858,7 @@ impl Default for Output {
             fields: default_fields(),
             fringe_constant: None,
             speed_window: default_speed_window(),
+            particles: false,
         }
     }
 }

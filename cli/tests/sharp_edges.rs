@@ -189,3 +189,36 @@ fn submit_to_a_server_that_is_not_running_says_so() {
     assert!(err.contains(&format!("127.0.0.1:{port}")), "{err}");
     assert!(err.contains("cargo run --release"), "{err}");
 }
+
+#[test]
+fn the_vtk_series_carries_the_particles_when_asked() {
+    let dir = tempfile::tempdir().unwrap();
+    let mut v = cracked(None);
+    v["output"] = json!({"snapshot_interval": 3.0e-6, "particles": true,
+                         "fields": ["stress", "velocity"]});
+    let f = write(dir.path(), "s.json", &v);
+    let out = dir.path().join("out");
+    let o = fracture(&[
+        "run",
+        f.to_str().unwrap(),
+        "--out",
+        out.to_str().unwrap(),
+        "--vtk",
+    ]);
+    assert_eq!(o.status.code(), Some(0), "{}", text(&o.stderr));
+    let summary: Value =
+        serde_json::from_str(&std::fs::read_to_string(out.join("summary.json")).unwrap()).unwrap();
+    let n = summary["particles"].as_u64().unwrap();
+    let pvd = std::fs::read_to_string(out.join("vtk/particles.pvd")).unwrap();
+    assert_eq!(pvd.matches("<DataSet").count(), 3, "{pvd}");
+    // Each file holds every particle of the run.
+    let first = std::fs::read_to_string(out.join("vtk/particles_00000.vtu")).unwrap();
+    assert!(
+        first.contains(&format!("NumberOfPoints=\"{n}\"")),
+        "{n} particles: {}",
+        &first[..first.len().min(600)]
+    );
+    for k in 0..3 {
+        assert!(out.join(format!("vtk/particles_{k:05}.vtu")).is_file());
+    }
+}

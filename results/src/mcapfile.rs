@@ -21,7 +21,7 @@ use std::path::Path;
 
 use base64::Engine as _;
 use fracture_api::Scene;
-use fracture_api::results::{CrackTipRow, EnergyRow, FieldComponent, Snapshot};
+use fracture_api::results::{CrackTipRow, EnergyRow, FieldComponent, ParticleSnapshot, Snapshot};
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
@@ -92,6 +92,26 @@ pub struct SnapshotMessage {
     pub components: Vec<ComponentMessage>,
     /// Each crack's line as a polyline (m).
     pub cracks: Vec<Vec<[f64; 2]>>,
+    /// (extension) The particles, when the scene records them (`output.particles`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub particles: Option<ParticlesMessage>,
+}
+
+/// The particles of a `/snapshot` message: positions (m) and each component per particle
+/// (`null` where not finite).
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct ParticlesMessage {
+    /// Positions x (m).
+    pub x: Vec<f32>,
+    /// Positions y (m).
+    pub y: Vec<f32>,
+    /// The components, one value per particle.
+    pub components: Vec<ComponentMessage>,
+}
+
+/// A component's values as the message carries them: `None` for a non-finite value.
+fn message_values(v: &[f32]) -> Vec<Option<f32>> {
+    v.iter().map(|v| v.is_finite().then_some(*v)).collect()
 }
 
 /// One field component on `/snapshot`.
@@ -127,6 +147,18 @@ impl From<&Snapshot> for SnapshotMessage {
                 })
                 .collect(),
             cracks: s.cracks.clone(),
+            particles: s.particles.as_ref().map(|p| ParticlesMessage {
+                x: p.x.clone(),
+                y: p.y.clone(),
+                components: p
+                    .components
+                    .iter()
+                    .map(|c| ComponentMessage {
+                        name: c.name.clone(),
+                        values: message_values(&c.values),
+                    })
+                    .collect(),
+            }),
         }
     }
 }
@@ -154,6 +186,22 @@ impl From<SnapshotMessage> for Snapshot {
                 })
                 .collect(),
             cracks: m.cracks,
+            particles: m.particles.map(|p| ParticleSnapshot {
+                x: p.x,
+                y: p.y,
+                components: p
+                    .components
+                    .into_iter()
+                    .map(|c| FieldComponent {
+                        name: c.name,
+                        values: c
+                            .values
+                            .into_iter()
+                            .map(|v| v.unwrap_or(f32::NAN))
+                            .collect(),
+                    })
+                    .collect(),
+            }),
         }
     }
 }

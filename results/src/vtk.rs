@@ -10,7 +10,9 @@
 //! * `fields.pvd` and `cracks.pvd`: the time series (ParaView's collection format), each
 //!   entry the snapshot's simulated time in seconds.
 //!
-//! Snapshots carry no particles, so there are no `.vtu` particle files.
+//! * one `particles_NNNNN.vtu` per snapshot that carries particles (the scene's
+//!   `output.particles`): the particles as XML UnstructuredGrid vertices (z = 0) with every
+//!   component per particle and the `velocity`/`displacement` vectors, and `particles.pvd`.
 //!
 //! The `.vti`/`.vtp` files are written by [`vtkio`] (inline base64 binary, XML format 1.0,
 //! uncompressed); the `.pvd` collection, which vtkio does not model, is a few lines of XML
@@ -22,8 +24,8 @@ use std::path::{Path, PathBuf};
 
 use fracture_api::results::Snapshot;
 use vtkio::model::{
-    Attribute, Attributes, ByteOrder, DataArray, DataSet, Extent, ImageDataPiece, Piece,
-    PolyDataPiece, Version, VertexNumbers, Vtk,
+    Attribute, Attributes, ByteOrder, CellType, Cells, DataArray, DataSet, Extent, ImageDataPiece,
+    Piece, PolyDataPiece, UnstructuredGridPiece, Version, VertexNumbers, Vtk,
 };
 
 use crate::mcapfile::{self, McapFileError};
@@ -71,6 +73,8 @@ pub struct VtkSeries {
     pub fields_pvd: PathBuf,
     /// The crack time series.
     pub cracks_pvd: PathBuf,
+    /// The particle time series, when the snapshots carry particles.
+    pub particles_pvd: Option<PathBuf>,
     /// Every file written, the two `.pvd` first.
     pub files: Vec<PathBuf>,
 }
@@ -83,6 +87,78 @@ pub fn grid_file_name(k: usize) -> String {
 /// Name of the crack file of the `k`-th snapshot of a series.
 pub fn crack_file_name(k: usize) -> String {
     format!("cracks_{k:05}.vtp")
+}
+
+/// Name of the particle file of the `k`-th snapshot of a series.
+pub fn particle_file_name(k: usize) -> String {
+    format!("particles_{k:05}.vtu")
+}
+
+/// The particles of a snapshot as a VTK UnstructuredGrid of vertices (z = 0), with every
+/// component as a Float32 point array and `velocity`/`displacement` as 3-vectors where both
+/// components are there. `None` when the snapshot carries no particles.
+pub fn particle_data(snap: &Snapshot) -> Result<Option<Vtk>, VtkError> {
+    let Some(p) = &snap.particles else {
+        return Ok(None);
+    };
+    let n = p.x.len();
+    for (name, len) in std::iter::once(("y", p.y.len())).chain(
+        p.components
+            .iter()
+            .map(|c| (c.name.as_str(), c.values.len())),
+    ) {
+        if len != n {
+            return Err(VtkError::BadSnapshot {
+                index: snap.index,
+                component: format!("particles.{name}"),
+                len,
+                nodes: n,
+            });
+        }
+    }
+    let points: Vec<f32> =
+        p.x.iter()
+            .zip(&p.y)
+            .flat_map(|(&x, &y)| [x, y, 0.0])
+            .collect();
+    let mut point = Vec::new();
+    for c in &p.components {
+        point.push(Attribute::DataArray(
+            DataArray::scalars(c.name.clone(), 1).with_data(c.values.clone()),
+        ));
+    }
+    let comp = |name: &str| p.components.iter().find(|c| c.name == name);
+    for (name, a, b) in [("velocity", "vx", "vy"), ("displacement", "ux", "uy")] {
+        if let (Some(a), Some(b)) = (comp(a), comp(b)) {
+            let v: Vec<f32> = a
+                .values
+                .iter()
+                .zip(&b.values)
+                .flat_map(|(&x, &y)| [x, y, 0.0])
+                .collect();
+            point.push(Attribute::DataArray(DataArray::vectors(name).with_data(v)));
+        }
+    }
+    Ok(Some(Vtk {
+        version: Version::new_xml(1, 0),
+        title: format!("particles of snapshot {} t = {} s", snap.index, snap.time),
+        byte_order: ByteOrder::LittleEndian,
+        file_path: None,
+        data: DataSet::inline(UnstructuredGridPiece {
+            points: points.into(),
+            cells: Cells {
+                cell_verts: VertexNumbers::XML {
+                    connectivity: (0..n as u64).collect(),
+                    offsets: (1..=n as u64).collect(),
+                },
+                types: vec![CellType::Vertex; n],
+            },
+            data: Attributes {
+                point,
+                cell: vec![],
+            },
+        }),
+    }))
 }
 
 /// The nodal grid of a snapshot as a VTK ImageData data set.
@@ -230,12 +306,14 @@ fn xml_bytes(vtk: Vtk, name: &str) -> Result<Vec<u8>, VtkError> {
     Ok(out)
 }
 
-/// The files of a series in memory, as (name, bytes): `fields.pvd`, `cracks.pvd`, then per
-/// snapshot its `.vti` and `.vtp`. For a server packing them into an archive.
+/// The files of a series in memory, as (name, bytes): `fields.pvd`, `cracks.pvd` (and
+/// `particles.pvd` when the snapshots carry particles), then per snapshot its `.vti`, `.vtp`
+/// (and `.vtu`). For a server packing them into an archive.
 pub fn series_files(snaps: &[Snapshot]) -> Result<Vec<(String, Vec<u8>)>, VtkError> {
     let mut files = Vec::with_capacity(2 + 2 * snaps.len());
     let mut grids = Vec::new();
     let mut cracks = Vec::new();
+    let mut particles = Vec::new();
     let mut data = Vec::new();
     for (k, s) in snaps.iter().enumerate() {
         let (g, c) = (grid_file_name(k), crack_file_name(k));
@@ -243,9 +321,17 @@ pub fn series_files(snaps: &[Snapshot]) -> Result<Vec<(String, Vec<u8>)>, VtkErr
         data.push((c.clone(), xml_bytes(crack_poly_data(s), &c)?));
         grids.push((s.time, g));
         cracks.push((s.time, c));
+        if let Some(vtu) = particle_data(s)? {
+            let name = particle_file_name(k);
+            data.push((name.clone(), xml_bytes(vtu, &name)?));
+            particles.push((s.time, name));
+        }
     }
     files.push(("fields.pvd".to_string(), pvd(&grids).into_bytes()));
     files.push(("cracks.pvd".to_string(), pvd(&cracks).into_bytes()));
+    if !particles.is_empty() {
+        files.push(("particles.pvd".to_string(), pvd(&particles).into_bytes()));
+    }
     files.extend(data);
     Ok(files)
 }
@@ -258,7 +344,11 @@ pub fn write_series(dir: &Path, snaps: &[Snapshot]) -> Result<VtkSeries, VtkErro
         source,
     })?;
     let mut written = Vec::new();
+    let mut particles_pvd = None;
     for (name, bytes) in series_files(snaps)? {
+        if name == "particles.pvd" {
+            particles_pvd = Some(dir.join(&name));
+        }
         let path = dir.join(name);
         fs::write(&path, bytes).map_err(|source| VtkError::Io {
             path: path.clone(),
@@ -269,6 +359,7 @@ pub fn write_series(dir: &Path, snaps: &[Snapshot]) -> Result<VtkSeries, VtkErro
     Ok(VtkSeries {
         fields_pvd: dir.join("fields.pvd"),
         cracks_pvd: dir.join("cracks.pvd"),
+        particles_pvd,
         files: written,
     })
 }
@@ -306,6 +397,7 @@ mod tests {
                 values: vec![0.0; 5],
             }],
             cracks: vec![],
+            particles: None,
         };
         assert!(matches!(
             image_data(&s),

@@ -61,6 +61,7 @@ fn series() -> Vec<Snapshot> {
                     comp("fringe", 0.75),
                 ],
                 cracks,
+                particles: None,
             }
         })
         .collect()

@@ -189,6 +189,7 @@ async fn heartbeats_fencing_results_and_finish(store: Store) {
             values: vec![v, f32::NAN],
         }],
         cracks: vec![],
+        particles: None,
     };
     for (i, v) in [(0, 1.0), (1, 2.0), (1, 3.0)] {
         let s = snap(i, v);

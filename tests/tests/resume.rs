@@ -172,6 +172,15 @@ fn a_killed_workers_job_resumes_from_its_checkpoint_as_if_never_interrupted() {
     let a = s.wait_done(&id, LONG);
     assert_eq!(status(&a), "completed", "{a}");
     assert_eq!(a["attempts"], 2, "{a}");
+    // The restart said where it resumed and how far the killed attempt had got: the server's
+    // log carries the job's restart note (the finished job's message is the summary's).
+    let log = std::fs::read_to_string(dir.path().join("server.log")).expect("server log");
+    assert!(
+        log.lines().any(|l| l.contains(&id)
+            && l.contains("attempt 2: resumed from its checkpoint at step")
+            && l.contains("after the previous attempt stopped at")),
+        "no restart note in the log:\n{log}"
+    );
 
     // It resumed from a checkpoint at or after the one seen, not from step 0.
     let log = std::fs::read_to_string(dir.path().join("server.log")).expect("server log");

@@ -711,6 +711,7 @@ mod tests {
                     values: vec![0.0; 36],
                 }],
                 cracks: Vec::new(),
+                particles: None,
             }
         }
     }

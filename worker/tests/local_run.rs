@@ -91,6 +91,7 @@ fn local_output_writes_the_run_output_files() {
             values: vec![0.0, 1.0, f32::NAN, 3.0],
         }],
         cracks: vec![],
+        particles: None,
     })
     .unwrap();
     // Flushed as it goes: readable before finish.

@@ -174,6 +174,9 @@ pub(super) async fn start_claim(
         .rewind_history(id, fence, st.cfg.lease, keep)
         .await?;
     restart_file(st, id, fence, scene, keep).await?;
+    if let Some(k) = keep {
+        tracing::info!(job = %id, step = k.step, "resuming from its checkpoint");
+    }
     if let Some(r) = &restart {
         tracing::info!(job = %id, attempt = r.attempt, "{}", r.message);
     }

@@ -55,14 +55,12 @@ pub(super) async fn worker_claim(
                 super::checkpoint::start_claim(&st, &job.id, job.fence, &job.scene).await?;
             // A restarted job's subscribers learn where it resumes and why its progress fell
             // back: the `restart` event, then the status with the job's new message.
-            let job = match &restart {
-                Some(r) => {
-                    st.hub.send(&job.id, JobEvent::Restart(r.clone()));
-                    st.hub.send(&job.id, JobEvent::Progress(r.progress));
-                    st.store.get(&job.id).await?.unwrap_or(job)
-                }
-                None => job,
-            };
+            if let Some(r) = &restart {
+                st.hub.send(&job.id, JobEvent::Restart(r.clone()));
+                st.hub.send(&job.id, JobEvent::Progress(r.progress));
+            }
+            // The row as the rewind left it (message and progress cleared or rewound).
+            let job = st.store.get(&job.id).await?.unwrap_or(job);
             let text = job.scene.clone();
             // A scene this version cannot read still goes to the worker, which fails the
             // job with the diagnosis.

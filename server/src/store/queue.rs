@@ -45,9 +45,12 @@ pub struct HistoryCursor {
 
 /// The claim's update of the chosen job (`$1` worker, `$2` lease end, `$3` now); the
 /// caller adds the `WHERE` clause.
+///
+/// The job's message and progress stay: [`Store::rewind_history`], which the claim route
+/// runs next, reads them (how far the previous attempt got, and why it stopped) and then
+/// clears or rewinds them.
 const CLAIM_SET: &str = "UPDATE jobs SET status = 'running', attempts = attempts + 1,
-        fence = fence + 1, worker_id = $1, lease_until_ms = $2, message = NULL,
-        progress = NULL, started_at = $3";
+        fence = fence + 1, worker_id = $1, lease_until_ms = $2, started_at = $3";
 
 /// The best claimable job (after the caller's `SELECT` list): queued, not of a sweep that
 /// has `max_concurrent` of its jobs running; highest priority, then oldest.
@@ -217,18 +220,23 @@ impl Store {
             }
         }
         let restart = Restart::after(attempts, progress, cause.as_deref(), keep);
-        if let Some(r) = &restart {
-            let p = to_json("progress", &r.progress)?;
-            on_tx!(&mut tx, c => sqlx::query(
-                "UPDATE jobs SET message = $1, progress = $2 WHERE id = $3",
-            )
-            .bind(&r.message)
-            .bind(p)
-            .bind(id)
-            .execute(c)
-            .await
-            .map(|_| ())?);
-        }
+        // A first attempt starts with no message and no progress.
+        let (message, p) = match &restart {
+            Some(r) => (
+                Some(r.message.clone()),
+                Some(to_json("progress", &r.progress)?),
+            ),
+            None => (None, None),
+        };
+        on_tx!(&mut tx, c => sqlx::query(
+            "UPDATE jobs SET message = $1, progress = $2 WHERE id = $3",
+        )
+        .bind(message)
+        .bind(p)
+        .bind(id)
+        .execute(c)
+        .await
+        .map(|_| ())?);
         tx.commit().await?;
         Ok(restart)
     }
@@ -520,10 +528,14 @@ impl Restart {
                         fraction,
                     },
                     format!(
-                        "resumed from its checkpoint at step {} (t = {:e} s, {} of the end time)",
+                        "resumed from its checkpoint at step {} (t = {:e} s{})",
                         k.step,
                         k.time,
-                        pct(fraction)
+                        if end > 0.0 {
+                            format!(", {} of the end time", pct(fraction))
+                        } else {
+                            String::new()
+                        }
                     ),
                 )
             }

@@ -3,7 +3,9 @@
 //! the optional phases, and field snapshots (mass-weighted nodal averages of particle values).
 
 use fracture_api::Scene;
-use fracture_api::results::{CrackTipRow, EnergyRow, FieldComponent, Snapshot, field_components};
+use fracture_api::results::{
+    CrackTipRow, EnergyRow, FieldComponent, ParticleSnapshot, Snapshot, field_components,
+};
 use fracture_api::scene::FieldKind;
 
 use super::Simulation;
@@ -160,6 +162,18 @@ impl Simulation {
         let fringe_c = self.scene.output.fringe_constant.unwrap_or(f64::NAN);
         let p = &self.parts;
         let mut vals = vec![0.0f64; nc];
+        // Per-particle values too, when the scene asks for them (`output.particles`).
+        let mut cloud = self.scene.output.particles.then(|| ParticleSnapshot {
+            x: Vec::with_capacity(p.len()),
+            y: Vec::with_capacity(p.len()),
+            components: names
+                .iter()
+                .map(|n| FieldComponent {
+                    name: (*n).to_string(),
+                    values: Vec::with_capacity(p.len()),
+                })
+                .collect(),
+        });
         for i in 0..p.len() {
             let k = p.kin[i];
             let s = p.stress[i];
@@ -189,6 +203,13 @@ impl Simulation {
                     "material" => p.mech[i].mat as f64,
                     _ => 0.0,
                 };
+            }
+            if let Some(c) = cloud.as_mut() {
+                c.x.push(k.x[0] as f32);
+                c.y.push(k.x[1] as f32);
+                for (comp, v) in c.components.iter_mut().zip(&vals) {
+                    comp.values.push(*v as f32);
+                }
             }
             let w = Weights2::new(self.shape, g.xi(k.x), p.mech[i].lh);
             for a in 0..3 {
@@ -237,6 +258,7 @@ impl Simulation {
             fields: fields.iter().map(|f| f.name().to_string()).collect(),
             components,
             cracks: self.cracks.as_ref().map(|c| c.lines()).unwrap_or_default(),
+            particles: cloud,
         }
     }
 }
