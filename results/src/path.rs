@@ -16,7 +16,7 @@ use fracture_api::scene::Region;
 /// Width and height of the picture's plot area (px, before margins).
 const PLOT_W: f64 = 640.0;
 /// Margins: left (tick labels), right (colour bar), top (title), bottom (axis labels).
-const MARGIN: [f64; 4] = [64.0, 96.0, 36.0, 48.0];
+const MARGIN: [f64; 4] = [64.0, 128.0, 36.0, 48.0];
 
 /// One tip's path: `(time, x, y)` samples at which it moved.
 pub type TipPath = Vec<(f64, f64, f64)>;

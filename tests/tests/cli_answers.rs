@@ -10,9 +10,10 @@ use std::time::{Duration, Instant};
 use fracture_e2e::{Server, fracture_bin, scene, tiny_scene};
 use serde_json::{Value, json};
 
-/// Peak `speed` and mean speed (path between samples / time span) of every tip, keyed
-/// `crack/tip`, from the API's rows: the reference the printed summary is checked against.
-fn tip_reference(rows: &[Value]) -> BTreeMap<String, (f64, f64)> {
+/// Per tip, keyed `crack/tip`, from the API's rows: the last finite K_I, the time of the
+/// first growing sample (NaN if none) and the growth (last length − first): the reference
+/// the printed results are checked against, computed apart from the summary.
+fn tip_reference(rows: &[Value]) -> BTreeMap<String, (f64, f64, f64)> {
     let mut by_tip: BTreeMap<String, Vec<&Value>> = BTreeMap::new();
     for r in rows {
         by_tip
@@ -24,17 +25,18 @@ fn tip_reference(rows: &[Value]) -> BTreeMap<String, (f64, f64)> {
     by_tip
         .into_iter()
         .map(|(k, rs)| {
-            let peak = rs
+            let k1 = rs
                 .iter()
-                .map(|r| f(&r["speed"]))
+                .map(|r| f(&r["k1"]))
                 .filter(|v| v.is_finite())
-                .fold(f64::NAN, f64::max);
-            let path: f64 = rs
-                .windows(2)
-                .map(|w| (f(&w[1]["x"]) - f(&w[0]["x"])).hypot(f(&w[1]["y"]) - f(&w[0]["y"])))
-                .sum();
-            let span = f(&rs[rs.len() - 1]["time"]) - f(&rs[0]["time"]);
-            (k, (peak, if span > 0.0 { path / span } else { f64::NAN }))
+                .last()
+                .unwrap_or(f64::NAN);
+            let initiation = rs
+                .iter()
+                .find(|r| r["growing"].as_bool() == Some(true))
+                .map_or(f64::NAN, |r| f(&r["time"]));
+            let growth = f(&rs[rs.len() - 1]["length"]) - f(&rs[0]["length"]);
+            (k, (k1, initiation, growth))
         })
         .collect()
 }
@@ -77,23 +79,51 @@ fn check_summary(s: &Server, stdout: &str, id: &str) {
         !reference.is_empty(),
         "the scene has a crack: rows expected"
     );
-    for (key, (peak, mean)) in &reference {
+    let tips = summary["tips"].as_array().expect("summary.tips");
+    assert_eq!(tips.len(), reference.len(), "{summary}");
+    let lines: Vec<&str> = stdout.lines().collect();
+    for (key, (k1, initiation, growth)) in &reference {
         let (crack, tip) = key.split_once('/').expect("key");
-        let line = stdout
-            .lines()
-            .find(|l| {
+        let at = lines
+            .iter()
+            .position(|l| {
                 l.trim_start()
-                    .starts_with(&format!("crack {crack} tip {tip}:"))
+                    .starts_with(&format!("crack {crack} tip {tip}: K_I"))
             })
             .unwrap_or_else(|| panic!("no line for crack {crack} tip {tip}:\n{stdout}"));
-        let printed_peak = number_after(line, "peak ");
-        let printed_mean = number_after(line, "mean ");
-        let close = |p: Option<f64>, r: f64| match p {
-            Some(p) => (p - r).abs() <= 0.051 + 1e-9 * r.abs(),
-            None => !r.is_finite(),
-        };
-        assert!(close(printed_peak, *peak), "peak {peak} vs {line}");
-        assert!(close(printed_mean, *mean), "mean {mean} vs {line}");
+        match number_after(lines[at], "K_I ") {
+            Some(p) => assert!((p - k1 * 1e-6).abs() <= 5.1e-5, "K_I {k1} vs {}", lines[at]),
+            None => assert!(
+                !k1.is_finite() && lines[at].contains("K_I –"),
+                "{}",
+                lines[at]
+            ),
+        }
+        let next = lines.get(at + 1).copied().unwrap_or("");
+        if initiation.is_finite() {
+            let t = number_after(next, "initiated at ").expect("initiation");
+            assert!(
+                (t - initiation * 1e6).abs() <= 5.1e-4,
+                "{initiation} vs {next}"
+            );
+            let g = number_after(next, "grew ").expect("growth");
+            assert!((g - growth * 1e3).abs() <= 5.1e-4, "{growth} vs {next}");
+            // The speeds are the summary's, printed to 0.1 m/s.
+            let t = tips
+                .iter()
+                .find(|t| t["crack"].to_string() == crack && t["tip"].to_string() == tip)
+                .expect("tip in the summary");
+            for (key, field) in [("mean ", "mean_speed"), ("peak ", "peak_speed")] {
+                let p = number_after(next, key).expect(key);
+                let v = t[field].as_f64().expect(field);
+                assert!(
+                    (p - v).abs() <= 0.051 + 1e-9 * v.abs(),
+                    "{field} {v} vs {next}"
+                );
+            }
+        } else {
+            assert!(next.contains("did not grow"), "{next}");
+        }
     }
 }
 
@@ -188,10 +218,11 @@ fn submit_wait_prints_the_result_summary() {
     let id = stdout.lines().next().unwrap_or("").trim().to_string();
     assert_eq!(s.job(&id)["status"], "completed");
     check_summary(&s, &stdout, &id);
-    // The crack grew: some tip has a positive peak speed in the summary.
+    // The crack grew: some tip initiated and has a positive peak speed in the summary.
     assert!(
         stdout
             .lines()
+            .filter(|l| l.contains("initiated at"))
             .filter_map(|l| number_after(l, "peak "))
             .any(|p| p > 0.0),
         "{stdout}"
@@ -329,9 +360,12 @@ fn sweep_wait_prints_one_row_per_combination() {
         assert_eq!(cells[1], v["time.cfl"].to_string(), "{row}");
         assert_eq!(cells[2], j["status"].as_str().unwrap_or("?"), "{row}");
         let rows = s.get_json(&format!("/api/v1/jobs/{id}/crack-tips"));
-        let peak = tip_reference(rows.as_array().expect("rows"))
-            .values()
-            .map(|(p, _)| *p)
+        // The sweep table's peak: the largest `speed` sample of any tip.
+        let peak = rows
+            .as_array()
+            .expect("rows")
+            .iter()
+            .filter_map(|r| r["speed"].as_f64())
             .filter(|p| p.is_finite())
             .fold(f64::NAN, f64::max);
         // `123.4 m/s` is two cells, `–` one.

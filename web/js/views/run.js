@@ -327,7 +327,7 @@ export function runView(main, { id }) {
     const win = table && table.speedWindow;
     replace(resultsHost, h('h2', { id: 'results-h' }, 'Results'),
       table ? h('p', { class: 'muted small-text', id: 'results-tips-note' }, 'Per crack tip. Lengths in mm, times in µs, K in MPa·√m.',
-        win ? ` Peak speed: the advance along the path over ${num(win * 1e6, 3)} µs (the speed window), divided by it; mean speed: growth over the time from initiation to the last advance.` : '') : null,
+        win ? ` Peak speed: the advance along the path over ${num(win * 1e6, 3)} µs (the speed window), divided by it; mean speed: the advance from the last sample at rest to the last advance, over that time.` : '') : null,
       table ? h('div', { class: 'results-host' }, h('table', { class: 'results-table', id: 'results-tips', 'aria-describedby': 'results-tips-note' },
         h('caption', { class: 'visually-hidden' }, 'Results per crack tip'),
         h('thead', {}, h('tr', {}, h('th', { scope: 'col' }, 'Tip'), table.columns.map((c) => h('th', { scope: 'col' }, c.heading, c.unit ? h('span', { class: 'unit' }, ` (${c.unit})`) : '')))),
