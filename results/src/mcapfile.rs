@@ -109,9 +109,32 @@ pub struct ParticlesMessage {
     pub components: Vec<ComponentMessage>,
 }
 
-/// A component's values as the message carries them: `None` for a non-finite value.
-fn message_values(v: &[f32]) -> Vec<Option<f32>> {
-    v.iter().map(|v| v.is_finite().then_some(*v)).collect()
+impl From<&FieldComponent> for ComponentMessage {
+    /// The values as the message carries them: `None` for a non-finite value.
+    fn from(c: &FieldComponent) -> Self {
+        ComponentMessage {
+            name: c.name.clone(),
+            values: c
+                .values
+                .iter()
+                .map(|v| v.is_finite().then_some(*v))
+                .collect(),
+        }
+    }
+}
+
+impl From<ComponentMessage> for FieldComponent {
+    /// `null` values read back as NaN.
+    fn from(c: ComponentMessage) -> Self {
+        FieldComponent {
+            name: c.name,
+            values: c
+                .values
+                .into_iter()
+                .map(|v| v.unwrap_or(f32::NAN))
+                .collect(),
+        }
+    }
 }
 
 /// One field component on `/snapshot`.
@@ -134,30 +157,12 @@ impl From<&Snapshot> for SnapshotMessage {
             origin: s.origin,
             cell_size: s.cell_size,
             fields: s.fields.clone(),
-            components: s
-                .components
-                .iter()
-                .map(|c| ComponentMessage {
-                    name: c.name.clone(),
-                    values: c
-                        .values
-                        .iter()
-                        .map(|v| v.is_finite().then_some(*v))
-                        .collect(),
-                })
-                .collect(),
+            components: s.components.iter().map(ComponentMessage::from).collect(),
             cracks: s.cracks.clone(),
             particles: s.particles.as_ref().map(|p| ParticlesMessage {
                 x: p.x.clone(),
                 y: p.y.clone(),
-                components: p
-                    .components
-                    .iter()
-                    .map(|c| ComponentMessage {
-                        name: c.name.clone(),
-                        values: message_values(&c.values),
-                    })
-                    .collect(),
+                components: p.components.iter().map(ComponentMessage::from).collect(),
             }),
         }
     }
@@ -173,34 +178,12 @@ impl From<SnapshotMessage> for Snapshot {
             origin: m.origin,
             cell_size: m.cell_size,
             fields: m.fields,
-            components: m
-                .components
-                .into_iter()
-                .map(|c| FieldComponent {
-                    name: c.name,
-                    values: c
-                        .values
-                        .into_iter()
-                        .map(|v| v.unwrap_or(f32::NAN))
-                        .collect(),
-                })
-                .collect(),
+            components: m.components.into_iter().map(FieldComponent::from).collect(),
             cracks: m.cracks,
             particles: m.particles.map(|p| ParticleSnapshot {
                 x: p.x,
                 y: p.y,
-                components: p
-                    .components
-                    .into_iter()
-                    .map(|c| FieldComponent {
-                        name: c.name,
-                        values: c
-                            .values
-                            .into_iter()
-                            .map(|v| v.unwrap_or(f32::NAN))
-                            .collect(),
-                    })
-                    .collect(),
+                components: p.components.into_iter().map(FieldComponent::from).collect(),
             }),
         }
     }

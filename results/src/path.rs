@@ -62,23 +62,6 @@ fn esc(s: &str) -> String {
         .replace('"', "&quot;")
 }
 
-/// A "nice" tick step for a span (1, 2 or 5 × 10^k) giving about `n` ticks.
-fn tick_step(span: f64, n: f64) -> f64 {
-    let raw = span / n;
-    let p = 10f64.powf(raw.log10().floor());
-    let m = raw / p;
-    let f = if m < 1.5 {
-        1.0
-    } else if m < 3.5 {
-        2.0
-    } else if m < 7.5 {
-        5.0
-    } else {
-        10.0
-    };
-    f * p
-}
-
 /// The picture's time colour (viridis) of `t` in [t0, t1].
 fn time_colour(t: f64, t0: f64, t1: f64) -> String {
     let s = if t1 > t0 {
@@ -248,7 +231,7 @@ pub fn path_svg(scene: &Scene, paths: &BTreeMap<(u32, u32), TipPath>) -> String 
     );
     for (k, (a0, a1)) in [(x0, x1), (y0, y1)].into_iter().enumerate() {
         let len_px = if k == 0 { plot_w } else { plot_h };
-        let step = tick_step((a1 - a0) * 1e3, (len_px / 80.0).max(2.0)) * 1e-3;
+        let step = crate::render::nice_step((a1 - a0) * 1e3, (len_px / 80.0).max(2.0)) * 1e-3;
         let mut v = (a0 / step).ceil() * step;
         while v <= a1 + 1e-12 * step.abs() {
             let label = format!("{}", (v * 1e3 * 1e6).round() / 1e6);

@@ -26,6 +26,7 @@ pub mod raster;
 use canvas::{Canvas, plain};
 use fracture_api::results::{FieldComponent, Snapshot};
 use fracture_api::scene::FieldKind;
+pub(crate) use legend::nice_step;
 use legend::{Layout, Quantity, notes};
 use raster::{Raster, Source};
 

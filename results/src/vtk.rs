@@ -22,7 +22,7 @@
 use std::fs;
 use std::path::{Path, PathBuf};
 
-use fracture_api::results::Snapshot;
+use fracture_api::results::{FieldComponent, Snapshot};
 use vtkio::model::{
     Attribute, Attributes, ByteOrder, CellType, Cells, DataArray, DataSet, Extent, ImageDataPiece,
     Piece, PolyDataPiece, UnstructuredGridPiece, Version, VertexNumbers, Vtk,
@@ -89,6 +89,25 @@ pub fn crack_file_name(k: usize) -> String {
     format!("cracks_{k:05}.vtp")
 }
 
+/// `velocity` = (vx, vy, 0) and `displacement` = (ux, uy, 0) as 3-component point arrays,
+/// for those of them whose two components are among `components`.
+fn vectors(components: &[FieldComponent]) -> Vec<Attribute> {
+    let find = |name: &str| components.iter().find(|c| c.name == name);
+    [("velocity", "vx", "vy"), ("displacement", "ux", "uy")]
+        .into_iter()
+        .filter_map(|(name, a, b)| {
+            let (a, b) = (find(a)?, find(b)?);
+            let v: Vec<f32> = a
+                .values
+                .iter()
+                .zip(&b.values)
+                .flat_map(|(&x, &y)| [x, y, 0.0])
+                .collect();
+            Some(Attribute::DataArray(DataArray::vectors(name).with_data(v)))
+        })
+        .collect()
+}
+
 /// Name of the particle file of the `k`-th snapshot of a series.
 pub fn particle_file_name(k: usize) -> String {
     format!("particles_{k:05}.vtu")
@@ -127,18 +146,7 @@ pub fn particle_data(snap: &Snapshot) -> Result<Option<Vtk>, VtkError> {
             DataArray::scalars(c.name.clone(), 1).with_data(c.values.clone()),
         ));
     }
-    let comp = |name: &str| p.components.iter().find(|c| c.name == name);
-    for (name, a, b) in [("velocity", "vx", "vy"), ("displacement", "ux", "uy")] {
-        if let (Some(a), Some(b)) = (comp(a), comp(b)) {
-            let v: Vec<f32> = a
-                .values
-                .iter()
-                .zip(&b.values)
-                .flat_map(|(&x, &y)| [x, y, 0.0])
-                .collect();
-            point.push(Attribute::DataArray(DataArray::vectors(name).with_data(v)));
-        }
-    }
+    point.extend(vectors(&p.components));
     Ok(Some(Vtk {
         version: Version::new_xml(1, 0),
         title: format!("particles of snapshot {} t = {} s", snap.index, snap.time),
@@ -182,17 +190,7 @@ pub fn image_data(snap: &Snapshot) -> Result<Vtk, VtkError> {
             DataArray::scalars(c.name.clone(), 1).with_data(c.values.clone()),
         ));
     }
-    for (name, a, b) in [("velocity", "vx", "vy"), ("displacement", "ux", "uy")] {
-        if let (Some(a), Some(b)) = (snap.component(a), snap.component(b)) {
-            let v: Vec<f32> = a
-                .values
-                .iter()
-                .zip(&b.values)
-                .flat_map(|(&x, &y)| [x, y, 0.0])
-                .collect();
-            point.push(Attribute::DataArray(DataArray::vectors(name).with_data(v)));
-        }
-    }
+    point.extend(vectors(&snap.components));
     let occupied: Vec<u8> = (0..nodes)
         .map(|n| {
             u8::from(

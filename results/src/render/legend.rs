@@ -128,8 +128,8 @@ fn trim_number(x: f64, sig: i32) -> String {
     }
 }
 
-/// Round step sizes 1, 2, 5 × 10^k.
-fn nice_step(span: f64, target: f64) -> f64 {
+/// Round step sizes 1, 2, 5 × 10^k giving about `target` steps over `span`.
+pub(crate) fn nice_step(span: f64, target: f64) -> f64 {
     if span <= 0.0 || !span.is_finite() {
         return 1.0;
     }
