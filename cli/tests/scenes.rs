@@ -341,3 +341,58 @@ fn benchmark_scenes_match_their_builders() {
         );
     }
 }
+
+/// The Rosakis examples run under the default growth law (the crack-tip equation of motion);
+/// the talk's `wave` rule lives in one named scene, `rosakis-shear-seed-rule.json`.
+#[test]
+fn rosakis_examples_use_the_default_law_and_one_scene_keeps_the_seed_rule() {
+    use fracture_api::scene::{GrowthSpeed, Propagation};
+    let mut seen = 0;
+    for f in scene_files() {
+        let name = f.file_stem().unwrap().to_str().unwrap().to_string();
+        if !name.starts_with("rosakis-shear") {
+            continue;
+        }
+        let (scene, _) = load(&name);
+        for (i, c) in scene.cracks.iter().enumerate() {
+            if let Propagation::EnergyRelease { speed, .. } = &c.propagation {
+                seen += 1;
+                let want = if name == "rosakis-shear-seed-rule" {
+                    GrowthSpeed::Wave
+                } else {
+                    GrowthSpeed::EquationOfMotion
+                };
+                assert_eq!(*speed, want, "{name}: cracks.{i}.propagation.speed");
+            }
+        }
+    }
+    assert!(seen >= 5, "growing Rosakis cracks seen: {seen}");
+}
+
+/// Scenes that record isochromatic fringes use a real plate: a thickness of a few
+/// millimetres and Homalite's stress-optic constant (20–25 kN/m), so the fringe orders
+/// compare with a photograph's (tens, not a hundred per metre of plate).
+#[test]
+fn fringe_scenes_use_a_real_plate() {
+    use fracture_api::scene::FieldKind;
+    let mut seen = 0;
+    for f in scene_files() {
+        let name = f.file_stem().unwrap().to_str().unwrap().to_string();
+        let (scene, _) = load(&name);
+        if !scene.output.fields.contains(&FieldKind::Fringe) {
+            continue;
+        }
+        seen += 1;
+        assert!(
+            (0.002..=0.02).contains(&scene.thickness),
+            "{name}: thickness {} m",
+            scene.thickness
+        );
+        let f = scene.output.fringe_constant.unwrap_or(f64::NAN);
+        assert!(
+            (2.0e4..=2.5e4).contains(&f),
+            "{name}: fringe_constant {f} N/m"
+        );
+    }
+    assert!(seen >= 10, "fringe scenes seen: {seen}");
+}
