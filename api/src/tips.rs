@@ -23,8 +23,9 @@ pub const LATE_FRACTION: f64 = 0.2;
 /// any speed a tip reaches on the cell sizes the examples use.
 pub const MIN_SPEED_WINDOW: f64 = 2.0e-6;
 
-/// What one crack tip (or cohesive interface front) did over a run.
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
+/// What one crack tip (or cohesive interface front) did over a run. Equality treats NaN (an
+/// undefined value) as equal to NaN, so a summary equals its own copy.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
 pub struct TipSummary {
     /// Index of the crack (scene cracks first, then interfaces), as `crack_tips.csv`.
     pub crack: u32,
@@ -115,8 +116,9 @@ pub struct TipSummary {
     pub speed_window: f64,
 }
 
-/// A scene's reference value compared with the run (`summary.references`).
-#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
+/// A scene's reference value compared with the run (`summary.references`). Equality treats
+/// NaN as equal to NaN, as [`TipSummary`]'s.
+#[derive(Debug, Clone, Serialize, Deserialize, JsonSchema, utoipa::ToSchema)]
 pub struct ReferenceCheck {
     /// What was compared.
     pub quantity: ReferenceQuantity,
@@ -148,6 +150,58 @@ pub struct ReferenceCheck {
     /// Whether |relative_error| ≤ tolerance; null without a tolerance or a measured value.
     #[serde(default)]
     pub within: Option<bool>,
+}
+
+/// Equal numbers, or both NaN.
+fn same(a: f64, b: f64) -> bool {
+    a == b || (a.is_nan() && b.is_nan())
+}
+
+impl TipSummary {
+    /// The numbers of the summary, in field order.
+    fn numbers(&self) -> [f64; 18] {
+        [
+            self.x,
+            self.y,
+            self.initiation_time,
+            self.growth,
+            self.j1_final,
+            self.j1_peak,
+            self.k1_final,
+            self.k1_peak,
+            self.k2_final,
+            self.k2_peak,
+            self.j1_late_mean,
+            self.k1_late_mean,
+            self.k2_late_mean,
+            self.mean_speed,
+            self.peak_speed,
+            self.speed_window,
+            f64::from(self.crack),
+            f64::from(self.tip),
+        ]
+    }
+}
+
+impl PartialEq for TipSummary {
+    fn eq(&self, o: &Self) -> bool {
+        self.samples == o.samples
+            && self
+                .numbers()
+                .iter()
+                .zip(o.numbers())
+                .all(|(&a, b)| same(a, b))
+    }
+}
+
+impl PartialEq for ReferenceCheck {
+    fn eq(&self, o: &Self) -> bool {
+        (self.quantity, self.at, self.crack, self.tip) == (o.quantity, o.at, o.crack, o.tip)
+            && (&self.source, self.tolerance, self.within) == (&o.source, o.tolerance, o.within)
+            && same(self.value, o.value)
+            && same(self.measured, o.measured)
+            && same(self.relative_error, o.relative_error)
+    }
 }
 
 /// Running statistics of one tip.
@@ -512,5 +566,10 @@ mod tests {
         assert_eq!(checks[3].within, None, "no speed: not judged");
         let json = serde_json::to_value(&checks[2]).unwrap_or_default();
         assert!(json["measured"].is_null(), "{json}");
+        // NaN reads back as NaN, and a summary equals its copy.
+        let back: ReferenceCheck = serde_json::from_value(json).unwrap_or_else(|e| panic!("{e}"));
+        assert_eq!(back, checks[2]);
+        assert_eq!(tips, tips.clone());
+        assert_ne!(checks[0], checks[1]);
     }
 }
