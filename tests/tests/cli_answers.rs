@@ -28,8 +28,8 @@ fn tip_reference(rows: &[Value]) -> BTreeMap<String, (f64, f64, f64)> {
             let k1 = rs
                 .iter()
                 .map(|r| f(&r["k1"]))
-                .filter(|v| v.is_finite())
-                .last()
+                .rev()
+                .find(|v| v.is_finite())
                 .unwrap_or(f64::NAN);
             let initiation = rs
                 .iter()
@@ -111,7 +111,10 @@ fn check_summary(s: &Server, stdout: &str, id: &str) {
             // The speeds are the summary's, printed to 0.1 m/s.
             let t = tips
                 .iter()
-                .find(|t| t["crack"].to_string() == crack && t["tip"].to_string() == tip)
+                .find(|t| {
+                    t["crack"].as_u64().map(|c| c.to_string()).as_deref() == Some(crack)
+                        && t["tip"].as_u64().map(|k| k.to_string()).as_deref() == Some(tip)
+                })
                 .expect("tip in the summary");
             for (key, field) in [("mean ", "mean_speed"), ("peak ", "peak_speed")] {
                 let p = number_after(next, key).expect(key);
