@@ -401,7 +401,8 @@ pub struct Crack {
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub j_contour: Option<u32>,
     /// How J is evaluated at this crack's tips (`scene-format.md`); default
-    /// [`JIntegral::default_for`]: the domain integral over a ring of radius 6 cells.
+    /// [`JIntegral::default_in`]: the domain integral over a ring of radius 6 cells, or for
+    /// a crack growing by the equation of motion, of L/16 (L the scene's length scale).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub j_integral: Option<JIntegral>,
 }
@@ -527,8 +528,24 @@ pub enum JIntegral {
 }
 
 impl JIntegral {
-    /// Cells of the default domain radius.
+    /// Cells of the default domain radius of a crack that does not grow by the equation of
+    /// motion. J of a crack at rest is domain independent, so this ring is a quadrature
+    /// choice that converges with h (`docs/verification.md`), not part of a model.
     pub const DEFAULT_RADIUS_CELLS: f64 = 6.0;
+
+    /// The default domain radius of a crack that grows by the equation of motion, as a
+    /// fraction of the scene's length scale ([`Scene::length_scale`]). The ring sets the
+    /// zone behind the tip ([`Propagation::DEFAULT_ZONE_FRACTION`]) and the filter time
+    /// ([`Propagation::DEFAULT_FILTER_TRANSITS`]), so it is part of the tip law: it must not
+    /// follow the cell (`algorithm.md` pitfall 13). 1/16 of the shortest side of the bodies'
+    /// bounding box: 6.25 mm for Kalthoff–Winkler (100 mm), 7.8 mm for the Rosakis block
+    /// (125 mm), 4.4 mm for the growing Freund strip (70 mm); `docs/growth.md` measures
+    /// the dependence on it.
+    pub const GROWTH_RADIUS_FRACTION: f64 = 1.0 / 16.0;
+
+    /// The fewest cells across the ring of a crack that grows by the equation of motion
+    /// (validation): the zone behind the tip, a third of the ring, then spans one cell.
+    pub const MIN_GROWTH_RADIUS_CELLS: f64 = 3.0;
 
     /// The method of a crack: its `j_integral`, else its `j_contour` (old spelling), else
     /// the domain integral with radius [`Self::DEFAULT_RADIUS_CELLS`]·`cell_size`.
@@ -539,6 +556,25 @@ impl JIntegral {
             (None, None) => JIntegral::Domain {
                 radius: Self::DEFAULT_RADIUS_CELLS * cell_size,
             },
+        }
+    }
+
+    /// The method of a crack in `scene`: as [`Self::default_for`], except that a crack
+    /// growing by the equation of motion without its own method gets the physical ring
+    /// [`Self::GROWTH_RADIUS_FRACTION`]·L (L the scene's length scale), whatever the cell.
+    pub fn default_in(crack: &Crack, scene: &Scene) -> JIntegral {
+        let eom = matches!(
+            crack.propagation,
+            Propagation::EnergyRelease {
+                speed: GrowthSpeed::EquationOfMotion,
+                ..
+            }
+        );
+        match (crack.j_integral, crack.j_contour) {
+            (None, None) if eom => JIntegral::Domain {
+                radius: Self::GROWTH_RADIUS_FRACTION * scene.length_scale(),
+            },
+            _ => Self::default_for(crack, scene.grid.cell_size),
         }
     }
 }
@@ -580,8 +616,8 @@ pub enum Propagation {
         speed: GrowthSpeed,
         /// Time constant (s) of the filter on J that the equation of motion decides on, and
         /// of the speed's relaxation towards the balance (`equation_of_motion` only).
-        /// Default: the time a shear wave takes to cross three cells, 3h/c_S
-        /// ([`Propagation::DEFAULT_FILTER_CELLS`]), half the default ring's r/c_S.
+        /// Default: the time a shear wave takes to cross half the J ring, R/(2c_S)
+        /// ([`Propagation::DEFAULT_FILTER_TRANSITS`]): the ring's own delay.
         #[serde(default, skip_serializing_if = "Option::is_none")]
         filter_time: Option<f64>,
         /// Length (m) of the process zone behind a tip that moves by the equation of motion:
@@ -596,12 +632,12 @@ pub enum Propagation {
 }
 
 impl Propagation {
-    /// The default filter time is this many shear-wave transits of a cell, τ = n·h/c_S. A
-    /// number of cells, not of J radii: a radius study at one cell size then keeps the
-    /// same time resolution of the crack speed (on the reduced Rosakis scene at 1 mm cells,
-    /// rings of 4, 6 and 8 mm gave 1037/1035/1035 m/s with τ fixed, 1089/1036/993 with
-    /// τ = r/(2c_S)).
-    pub const DEFAULT_FILTER_CELLS: f64 = 3.0;
+    /// The default filter time is this many shear-wave transits of the J ring's radius R,
+    /// τ = n·R/c_S: a time of the model (R is physical), never of the cell
+    /// (`algorithm.md` pitfall 13). The ring's J answers a change at the tip after the
+    /// waves have crossed it, so filtering over less than about R/(2c_S) removes noise the
+    /// ring has not averaged, and over much more delays the tip (`docs/growth.md`).
+    pub const DEFAULT_FILTER_TRANSITS: f64 = 0.5;
     /// The default process zone is this fraction of the J domain radius.
     pub const DEFAULT_ZONE_FRACTION: f64 = 1.0 / 3.0;
 }
@@ -886,6 +922,25 @@ impl Scene {
         use sha2::{Digest, Sha256};
         let digest = Sha256::digest(self.canonical_json().as_bytes());
         digest.iter().map(|b| format!("{b:02x}")).collect()
+    }
+
+    /// The scene's length scale L (m): the shorter side of the bounding box of all bodies
+    /// (the grid's when there are none). Physical defaults of the growth law are fractions
+    /// of it ([`JIntegral::GROWTH_RADIUS_FRACTION`]), so they do not change with the cell.
+    pub fn length_scale(&self) -> f64 {
+        let mut lo = [f64::INFINITY; 2];
+        let mut hi = [f64::NEG_INFINITY; 2];
+        for b in &self.bodies {
+            let (a, c) = b.region.bounds();
+            for k in 0..2 {
+                lo[k] = lo[k].min(a[k]);
+                hi[k] = hi[k].max(c[k]);
+            }
+        }
+        if !(lo[0] < hi[0] && lo[1] < hi[1]) {
+            (lo, hi) = (self.grid.min, self.grid.max);
+        }
+        (hi[0] - lo[0]).min(hi[1] - lo[1])
     }
 
     /// The time step Δt = cfl·h/C_L with the largest C_L over the materials, or `None`

@@ -11,8 +11,8 @@ use serde::{Deserialize, Serialize};
 
 use crate::lattice;
 use crate::scene::{
-    Analysis, CohesiveLaw, ContactLaw, Damping, FieldKind, GrowthDirection, JIntegral, Propagation,
-    Region, Scene, Toughness, Vec2,
+    Analysis, CohesiveLaw, ContactLaw, Damping, FieldKind, GrowthDirection, GrowthSpeed, JIntegral,
+    Propagation, Region, Scene, Toughness, Vec2,
 };
 
 /// The largest `time.cfl` a scene with an exponential or cubic interface may use: their stiff
@@ -473,6 +473,39 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
                 }
             }
             _ => {}
+        }
+        // A crack growing by the equation of motion: its ring (and with it the zone behind
+        // the tip and the filter time) is part of the tip law and must span enough cells.
+        if let (
+            Propagation::EnergyRelease {
+                speed: GrowthSpeed::EquationOfMotion,
+                ..
+            },
+            JIntegral::Domain { radius },
+        ) = (&cr.propagation, JIntegral::default_in(cr, scene))
+            && radius.is_finite()
+            && h.is_finite()
+            && h > 0.0
+            && (cr.j_integral.is_none() || radius >= 2.0 * h)
+            && radius < JIntegral::MIN_GROWTH_RADIUS_CELLS * h
+        {
+            let (field, what) = if cr.j_integral.is_some() {
+                (format!("{p}.j_integral.radius"), "the ring")
+            } else {
+                (
+                    format!("{p}.j_integral"),
+                    "the default ring (1/16 of the scene's shortest body side)",
+                )
+            };
+            c.err(
+                field,
+                radius,
+                format!(
+                    "{what} of a crack growing by the equation of motion spans under {} cells ({:e} m): the zone behind the tip (a third of it) would not span a cell; refine the grid or set cracks.{i}.j_integral.radius",
+                    JIntegral::MIN_GROWTH_RADIUS_CELLS,
+                    JIntegral::MIN_GROWTH_RADIUS_CELLS * h
+                ),
+            );
         }
         if let ContactLaw::Coulomb { friction } = cr.contact {
             c.non_negative(&format!("{p}.contact.friction"), friction);

@@ -81,3 +81,40 @@ fn references_are_checked() {
     let p = problems(v);
     assert!(p.iter().any(|m| m.contains("references")), "{p:?}");
 }
+
+/// A growing crack's ring is part of its tip law (`algorithm.md` pitfall 13): its default is
+/// 1/16 of the scene's shortest body side, whatever the cell, and a grid too coarse to put
+/// three cells across it is refused naming the field and the fix. The 40 mm plate's default
+/// ring is 2.5 mm: three cells at 0.5 mm cells fit, at 1 mm cells they do not.
+#[test]
+fn a_growing_crack_needs_three_cells_across_its_physical_ring() {
+    use fracture_api::scene::JIntegral;
+    let growing = |h: f64| {
+        let mut v = plate();
+        v["grid"]["cell_size"] = json!(h);
+        v["cracks"][0]["propagation"] =
+            json!({"criterion": "energy_release", "toughness": 10.0});
+        v
+    };
+    let fine = scene_from_value(growing(0.0005)).expect("parses");
+    let coarse = scene_from_value(growing(0.001)).expect("parses");
+    let ring = |s: &fracture_api::Scene| match JIntegral::default_in(&s.cracks[0], s) {
+        JIntegral::Domain { radius } => radius,
+        JIntegral::Contour { .. } => f64::NAN,
+    };
+    assert!((ring(&fine) - 0.0025).abs() < 1e-12, "{}", ring(&fine));
+    assert_eq!(ring(&fine), ring(&coarse), "the default ring follows the cell");
+    assert_eq!(problems(growing(0.0005)), Vec::<String>::new());
+    let p = problems(growing(0.001));
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert!(p[0].starts_with("cracks.0.j_integral"), "{p:?}");
+    assert!(p[0].contains("cracks.0.j_integral.radius"), "{p:?}");
+    // An explicit ring of three cells is accepted; a crack at rest keeps its 6-cell ring.
+    let mut v = growing(0.001);
+    v["cracks"][0]["j_integral"] = json!({"method": "domain", "radius": 0.003});
+    assert_eq!(problems(v), Vec::<String>::new());
+    let mut v = growing(0.001);
+    v["cracks"][0]["propagation"] = json!({"criterion": "none"});
+    let s = scene_from_value(v).expect("parses");
+    assert!((ring(&s) - 0.006).abs() < 1e-12);
+}

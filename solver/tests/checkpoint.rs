@@ -29,7 +29,8 @@ fn strip(growth: bool, cohesive: bool, end: f64) -> Scene {
     let y1 = y1 + h;
     let (t_load, ramp) = (4.0e-5, 1.0e-5);
     let v = 2.0e-5 / (t_load - 0.5 * ramp);
-    let mut crack = json!({"points": [[m - 0.5 * h, cy], [m + 0.030, cy]]});
+    let mut crack = json!({"points": [[m - 0.5 * h, cy], [m + 0.030, cy]],
+                           "j_integral": {"method": "domain", "radius": 6.0 * h}});
     if growth {
         crack["propagation"] = json!({"criterion": "energy_release", "toughness": 150.0,
                                       "direction": {"fixed": [1.0, 0.0]},

@@ -88,6 +88,7 @@ fn dcb_crack_length_follows_beam_theory() {
         "materials": {"m": homalite()},
         "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [m + len, top]}}}],
         "cracks": [{"points": [[m - 0.5 * h, yc], [m + a0, yc]],
+                    "j_integral": {"method": "domain", "radius": 6.0 * h},
                     "propagation": {"criterion": "energy_release", "toughness": gc, "direction": {"fixed": [1.0, 0.0]}, "speed": std::env::var("SPEED").unwrap_or("equation_of_motion".into())}}],
         "boundary_conditions": [
             {"region": {"rectangle": {"min": [m - 0.25 * h, yc + 2.0 * h], "max": [m + 0.25 * h, 1.0]}}, "velocity": {"y": vel}, "ramp_time": ramp},
@@ -160,6 +161,7 @@ fn threads_give_identical_results_with_a_growing_crack() {
         "materials": {"m": homalite()},
         "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [0.042, 0.042]}}}],
         "cracks": [{"points": [[m - 0.5 * h, 0.0225], [0.015, 0.0225]],
+                    "j_integral": {"method": "domain", "radius": 6.0 * h},
                     "propagation": {"criterion": "energy_release", "toughness": 5.0}}],
         "loads": [
             {"region": {"rectangle": {"min": [0.0, 0.0415], "max": [1.0, 1.0]}}, "traction": [0.0, 2.0e6], "ramp_time": 5.0e-6},

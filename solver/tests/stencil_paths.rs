@@ -94,6 +94,7 @@ fn fast_path_matches_generic_path_with_a_growing_crack() {
         "materials": {"m": homalite()},
         "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [0.042, 0.042]}}}],
         "cracks": [{"points": [[m - 0.5 * h, 0.0225], [0.015, 0.0225]],
+                    "j_integral": {"method": "domain", "radius": 6.0 * h},
                     "propagation": {"criterion": "energy_release", "toughness": 5.0}}],
         "loads": [
             {"region": {"rectangle": {"min": [0.0, 0.0415], "max": [1.0, 1.0]}}, "traction": [0.0, 2.0e6], "ramp_time": 5.0e-6},

@@ -40,6 +40,7 @@ fn growing(name: &str) -> Value {
         "bodies": [{"material": "homalite",
                     "region": {"rectangle": {"min": [m, y0], "max": [m + len, y1]}}}],
         "cracks": [{"points": [[m - 0.5 * h, cy], [m + 0.030, cy]],
+                    "j_integral": {"method": "domain", "radius": 6.0 * h},
                     "propagation": {"criterion": "energy_release", "toughness": 150.0,
                                     "direction": {"fixed": [1.0, 0.0]},
                                     "speed": "equation_of_motion"}}],

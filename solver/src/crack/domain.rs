@@ -170,20 +170,19 @@ struct FaceNode {
 }
 
 impl Cracks {
-    /// Domain J at `radii` and the interaction-integral K at `radii[0]` for tip `t` of crack
-    /// `ci`, with the tip frame e1 (ahead) of that tip.
+    /// Domain J at `radii` and the interaction-integral K at `radii[0]` of crack `ci` for
+    /// rings centred at `tip` with the frame e1 (ahead): a tip's own frame, or the vertex of
+    /// a short kink with the parent crack's frame (`j_integral.rs`).
     pub(super) fn domain_integrals(
         &self,
         ci: usize,
-        t: usize,
+        (tip, e1): ([f64; 2], [f64; 2]),
         v: &View<'_>,
         radii: [f64; 3],
         medium: &TipMedium,
     ) -> DomainResult {
         let g = v.geom;
         let h = g.h;
-        let c = &self.cracks[ci];
-        let (tip, e1) = c.tip_frame(t, h);
         let e2 = [-e1[1], e1[0]];
         let r_max = radii.iter().fold(0.0_f64, |a, &b| a.max(b));
         let nan = [f64::NAN; 2];

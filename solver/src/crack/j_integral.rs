@@ -11,7 +11,7 @@ use fracture_api::scene::{GrowthSpeed, JIntegral, Propagation};
 
 use crate::grid::STRIP;
 use crate::shape::Weights2;
-use crate::tip_mechanics::TipMedium;
+use crate::tip_mechanics::{TipMedium, kinked_k};
 
 use super::domain::ring_fits;
 use super::geometry::{cross_param, crosses, dist, sub};
@@ -38,6 +38,51 @@ pub(super) struct TipEval {
     k_int: [f64; 2],
     /// The tip's medium (its nearest material).
     medium: TipMedium,
+    /// The radius of the ring (m) J was taken on.
+    #[serde(default)]
+    radius: f64,
+    /// For a tip on a kinked branch shorter than half the ring: the rings were centred on
+    /// the kink's vertex in the parent crack's frame, and this is that frame's e1.
+    #[serde(default)]
+    parent_e1: Option<[f64; 2]>,
+}
+
+/// Where the J rings of a tip are centred.
+#[derive(Debug, Clone, Copy)]
+enum Centre {
+    /// On the tip, in its own frame, with this ring radius.
+    Tip(f64),
+    /// On the vertex of a short kink, in the parent crack's frame (vertex, e1).
+    Vertex([f64; 2], [f64; 2]),
+}
+
+/// The driving force of a tip on a short kinked branch, from the parent crack's J and K
+/// measured around the kink's vertex (`algorithm.md` pitfall 15).
+#[derive(Debug, Clone, Copy)]
+pub(super) struct KinkDrive {
+    /// The parent crack's direction at the vertex.
+    pub(super) parent_e1: [f64; 2],
+    /// J1 of the parent in its own frame (J/m²).
+    pub(super) parent_j1: f64,
+    /// (K_I, K_II) of the parent, K_I of closed faces taken as 0.
+    pub(super) parent_k: [f64; 2],
+}
+
+impl KinkDrive {
+    /// G of a kinked extension at θ from the parent's direction: the parent's J1 times
+    /// |k(θ)|²/|K|² of Hussain, Pu & Underwood's kinked crack ([`kinked_k`]); with it
+    /// (k1, k2) scaled so that (k1² + k2²)/E' is that G. None when the parent has no K.
+    pub(super) fn at(&self, th: f64, e_prime: f64) -> Option<(f64, [f64; 2])> {
+        let [a, b] = self.parent_k;
+        let k2 = a * a + b * b;
+        if !(k2.is_finite() && k2 > 0.0 && self.parent_j1.is_finite()) {
+            return None;
+        }
+        let (ka, kb) = kinked_k(a, b, th);
+        let j = self.parent_j1.max(0.0);
+        let scale = (j * e_prime / k2).sqrt();
+        Some((j * (ka * ka + kb * kb) / k2, [ka * scale, kb * scale]))
+    }
 }
 
 /// J of a tip in its own frame (e1 ahead along the crack, e2 to its left), with K.
@@ -55,6 +100,9 @@ pub(super) struct TipFrameJ {
     pub(super) k_int: [f64; 2],
     /// The tip's medium (its nearest material).
     pub(super) medium: TipMedium,
+    /// Set for a tip on a kinked branch shorter than half its ring: J1 and K above are then
+    /// the kinked tip's, from the parent's field at the vertex.
+    pub(super) kink: Option<KinkDrive>,
 }
 
 impl Cracks {
@@ -201,9 +249,68 @@ impl Cracks {
         self.media[self.nearest_material(v, x)]
     }
 
+    /// Where tip `t`'s rings go for a ring of radius `radius`: on a kinked branch of length
+    /// s (`TipState::kink_at`) shorter than R/2, the vertex in the parent's frame (the
+    /// kinked-crack solution drives the tip, pitfall 15); between R/2 and R, on the tip with
+    /// the radius s, so that the vertex stays out of the ring; otherwise on the tip.
+    fn centre(&self, ci: usize, t: usize, radius: f64) -> Centre {
+        let c = &self.cracks[ci];
+        let Some(at) = c.tips[t].kink_at else {
+            return Centre::Tip(radius);
+        };
+        let s = c.tips[t].advance - at;
+        if !(s > 0.0) || s >= radius {
+            return Centre::Tip(radius);
+        }
+        if s >= 0.5 * radius {
+            return Centre::Tip(s);
+        }
+        let n = c.pts.len();
+        let at_k = |i: usize| {
+            if t == 0 {
+                c.pts[i].x
+            } else {
+                c.pts[n - 1 - i].x
+            }
+        };
+        // The vertex: the point whose path length from the tip is nearest s; the parent's
+        // direction: the chord from the point R/2 further back to it.
+        let (mut acc, mut vertex, mut best) = (0.0, None, f64::INFINITY);
+        let mut parent = None;
+        for i in 1..n {
+            acc += dist(at_k(i - 1), at_k(i));
+            match vertex {
+                None => {
+                    if (acc - s).abs() < best {
+                        best = (acc - s).abs();
+                    } else {
+                        vertex = Some((i - 1, acc - dist(at_k(i - 1), at_k(i))));
+                    }
+                }
+                Some((_, sv)) => {
+                    if acc - sv >= 0.5 * radius {
+                        parent = Some(i);
+                        break;
+                    }
+                }
+            }
+        }
+        let Some((iv, _)) = vertex else {
+            return Centre::Tip(radius);
+        };
+        let xv = at_k(iv);
+        let xp = at_k(parent.unwrap_or(n - 1));
+        let d = sub(xv, xp);
+        let l = d[0].hypot(d[1]);
+        if iv == 0 || !(l > 0.0) {
+            return Centre::Tip(radius);
+        }
+        Centre::Vertex(xv, [d[0] / l, d[1] / l])
+    }
+
     /// Evaluate tip `t` of crack `ci` now (uncached).
     fn evaluate(&self, ci: usize, t: usize, v: &View<'_>) -> TipEval {
-        let (tip, _) = self.cracks[ci].tip_frame(t, self.h);
+        let (tip, e1) = self.cracks[ci].tip_frame(t, self.h);
         let medium = self.medium(v, tip);
         let h = self.h;
         let (radius, contour) = match self.cracks[ci].j_method {
@@ -220,7 +327,12 @@ impl Cracks {
                 (radius, true)
             }
         };
-        let d = self.domain_integrals(ci, t, v, [radius, 0.5 * radius, 2.0 * radius], &medium);
+        let (frame, radius, parent_e1) = match (contour, self.centre(ci, t, radius)) {
+            (false, Centre::Vertex(x, e)) => ((x, e), radius, Some(e)),
+            (false, Centre::Tip(r)) => ((tip, e1), r, None),
+            (true, _) => ((tip, e1), radius, None),
+        };
+        let d = self.domain_integrals(ci, frame, v, [radius, 0.5 * radius, 2.0 * radius], &medium);
         let j = if contour {
             self.compute_j(ci, t, v).j
         } else {
@@ -232,6 +344,8 @@ impl Cracks {
             j_double: d.j[2],
             k_int: d.k,
             medium,
+            radius,
+            parent_e1,
         }
     }
 
@@ -258,6 +372,40 @@ impl Cracks {
         let e = self.tip_eval(ci, t, v, time);
         let (tip, e1) = self.cracks[ci].tip_frame(t, self.h);
         let e2 = [-e1[1], e1[0]];
+        if let Some(p1) = e.parent_e1 {
+            // A short kinked branch: the parent's J1 and K at the vertex (its frame), and the
+            // kinked tip's G and (k1, k2) at the branch's angle θ from them.
+            let p2 = [-p1[1], p1[0]];
+            let pj = |j: [f64; 2]| j[0] * p1[0] + j[1] * p1[1];
+            let drive = KinkDrive {
+                parent_e1: p1,
+                parent_j1: pj(e.j),
+                parent_k: [e.k_int[0].max(0.0), e.k_int[1]],
+            };
+            let th = (e1[0] * p2[0] + e1[1] * p2[1]).atan2(e1[0] * p1[0] + e1[1] * p1[1]);
+            let ep = e.medium.e_prime;
+            let (g, k) = drive.at(th, ep).unwrap_or((f64::NAN, [f64::NAN; 2]));
+            let scaled = |j: [f64; 2]| {
+                let jp = pj(j);
+                if drive.parent_j1 > 0.0 {
+                    g * jp / drive.parent_j1
+                } else {
+                    f64::NAN
+                }
+            };
+            return TipFrameJ {
+                tip,
+                e1,
+                e2,
+                j1: g,
+                j2: -2.0 * k[0] * k[1] / ep,
+                j_half: [scaled(e.j_half), f64::NAN],
+                j_double: [scaled(e.j_double), f64::NAN],
+                k_int: k,
+                medium: e.medium,
+                kink: Some(drive),
+            };
+        }
         let frame = |j: [f64; 2]| [j[0] * e1[0] + j[1] * e1[1], j[0] * e2[0] + j[1] * e2[1]];
         let [mut j1, j2] = frame(e.j);
         let [mut j1_half, j2_half] = frame(e.j_half);
@@ -272,7 +420,7 @@ impl Cracks {
                 ..
             }
         ) {
-            let r = self.j_radius(ci);
+            let r = e.radius;
             j1 += self.zone_outside_domain(ci, t, e1, r);
             j1_half += self.zone_outside_domain(ci, t, e1, 0.5 * r);
             j1_double += self.zone_outside_domain(ci, t, e1, 2.0 * r);
@@ -287,6 +435,7 @@ impl Cracks {
             j_double: [j1_double, j2_double],
             k_int: e.k_int,
             medium: e.medium,
+            kink: None,
         }
     }
 }
@@ -366,7 +515,7 @@ impl Cracks {
     /// window); for a moving tip the crack-opening K of [`Self::cod_k`] (the static auxiliary
     /// fields do not hold for a moving tip); NaN at and above c_R.
     pub(super) fn tip_k(&self, ci: usize, t: usize, tf: &TipFrameJ, speed: f64) -> [f64; 2] {
-        if speed == 0.0 {
+        if speed == 0.0 || tf.kink.is_some() {
             tf.k_int
         } else {
             self.cod_k(ci, t, tf.j1, speed, &tf.medium)

@@ -125,6 +125,11 @@ pub struct TipState {
     cached_j: Option<(f64, j_integral::TipEval)>,
     /// The tip lies on an interface, which grows instead of it (`algorithm.md` §8).
     pub on_interface: bool,
+    /// The tip's advance when it last kinked (its direction turned by more than
+    /// `propagation::KINK_DEG`), while the kinked branch is shorter than the J ring: its
+    /// driving force then comes from the parent crack (`j_integral.rs`, pitfall 15).
+    #[serde(default)]
+    pub kink_at: Option<f64>,
 }
 
 /// One crack.
@@ -419,7 +424,7 @@ impl Cracks {
                     tips,
                     contact: c.contact.clone(),
                     propagation: c.propagation.clone(),
-                    j_method: JIntegral::default_for(c, h),
+                    j_method: JIntegral::default_in(c, scene),
                     ext,
                     interface: false,
                     fronts: Fronts::default(),

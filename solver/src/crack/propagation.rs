@@ -67,6 +67,11 @@ pub(crate) const SPEED_LIMIT: f64 = 1.0 - 1e-3;
 /// on 3 / 6 / 12 mm rings, 5.3 % of the 6 mm ring's samples below −0.1 Γ; with the wall 0 %).
 pub(crate) const WALL_FRACTION: f64 = 0.99;
 
+/// A growth direction this far (degrees) from the tip's direction starts a kinked branch,
+/// driven from the parent crack's field until it is as long as the J ring
+/// (`j_integral.rs`, `algorithm.md` pitfall 15).
+pub(crate) const KINK_DEG: f64 = 10.0;
+
 /// Whether a tip running at v is at the wall that closes Γ(v) ([`WALL_FRACTION`]).
 pub(crate) fn at_speed_wall(v: f64, c_r: f64) -> bool {
     v >= WALL_FRACTION * SPEED_LIMIT * c_r
@@ -239,8 +244,40 @@ impl Cracks {
                         [co * e1[0] + s * e2[0], co * e1[1] + s * e2[1]],
                     )
                 };
-                let (g, dir) = match direction {
-                    GrowthDirection::MaxEnergyRelease | GrowthDirection::MaxHoopStress => {
+                // A kinked branch as long as the ring is driven by its own tip again.
+                if let Some(at) = self.cracks[ci].tips[t].kink_at
+                    && self.cracks[ci].tips[t].advance - at >= radius
+                {
+                    self.cracks[ci].tips[t].kink_at = None;
+                }
+                let (g, dir) = match (&direction, tf.kink) {
+                    // A short kinked branch (pitfall 15): it keeps the criterion's angle from
+                    // the parent's current K and the kinked-crack G there; for the equation of
+                    // motion the tip's dynamic G, Freund's g(v) times it (the rate the law
+                    // expects, as a running tip's domain J is).
+                    (
+                        GrowthDirection::MaxEnergyRelease | GrowthDirection::MaxHoopStress,
+                        Some(kd),
+                    ) => {
+                        let [a, b] = kd.parent_k;
+                        let th = if matches!(direction, GrowthDirection::MaxHoopStress) {
+                            hoop_stress_angle(a, b)
+                        } else {
+                            max_energy_release_angle(a, b).0
+                        };
+                        let (s, co) = th.sin_cos();
+                        let (p1, p2) = (kd.parent_e1, [-kd.parent_e1[1], kd.parent_e1[0]]);
+                        let g_static = kd.at(th, tf.medium.e_prime).map_or(f64::NAN, |x| x.0);
+                        let g = match speed {
+                            GrowthSpeed::EquationOfMotion => {
+                                g_static
+                                    * freund_g(self.cracks[ci].tips[t].eom_speed, tf.medium.c_r)
+                            }
+                            GrowthSpeed::Wave => g_static,
+                        };
+                        (g, [co * p1[0] + s * p2[0], co * p1[1] + s * p2[1]])
+                    }
+                    (GrowthDirection::MaxEnergyRelease | GrowthDirection::MaxHoopStress, None) => {
                         let speed = self.tip_speed(&self.cracks[ci].tips[t], time);
                         let k = self.tip_k(ci, t, &tf, speed);
                         if matches!(direction, GrowthDirection::MaxHoopStress) {
@@ -249,7 +286,7 @@ impl Cracks {
                             kink(|a, b| max_energy_release_angle(a, b).0, k)
                         }
                     }
-                    GrowthDirection::Fixed(d) => {
+                    (&GrowthDirection::Fixed(d), _) => {
                         let l = norm(d).max(1e-300);
                         let mut d = [d[0] / l, d[1] / l];
                         // The direction is a line: take the sense that points ahead.
@@ -270,8 +307,9 @@ impl Cracks {
                         (self.cfl * self.h, toughness.at_rest(), 0.0)
                     }
                     GrowthSpeed::EquationOfMotion => {
-                        let tau = filter_time
-                            .unwrap_or(Propagation::DEFAULT_FILTER_CELLS * self.h / tf.medium.c_s);
+                        let tau = filter_time.unwrap_or(
+                            Propagation::DEFAULT_FILTER_TRANSITS * radius / tf.medium.c_s,
+                        );
                         let tip_state = &mut self.cracks[ci].tips[t];
                         if g.is_finite() {
                             if tip_state.g_filtered.is_finite() {
@@ -307,6 +345,17 @@ impl Cracks {
                         (speed * dt, gamma, zone_len)
                     }
                 };
+                // A turn of more than KINK_DEG from the tip's direction starts a kinked
+                // branch, unless the tip is already on a short one (whose direction comes
+                // from the parent, not from its own still-straight chord).
+                {
+                    let tip_state = &mut self.cracks[ci].tips[t];
+                    if tip_state.kink_at.is_none()
+                        && dir[0] * e1[0] + dir[1] * e1[1] < KINK_DEG.to_radians().cos()
+                    {
+                        tip_state.kink_at = Some(tip_state.advance);
+                    }
+                }
                 let new_zone =
                     (zone_len > 0.0).then(|| Zone::new(gamma, zone_len, tf.medium.e_prime));
                 let (tip_i, prev_i) = {
