@@ -12,12 +12,14 @@ pub use fracture_api::scene::ShapeFunction;
 mod continuum;
 mod cracks;
 mod freund;
+mod freund_growth;
 mod growth;
 mod references;
 
 pub use continuum::*;
 pub use cracks::*;
 pub use freund::*;
+pub use freund_growth::*;
 pub use growth::*;
 pub use references::*;
 
