@@ -14,6 +14,7 @@ mod cracks;
 mod freund;
 mod freund_growth;
 mod growth;
+mod kinks;
 mod references;
 
 pub use continuum::*;
@@ -21,6 +22,7 @@ pub use cracks::*;
 pub use freund::*;
 pub use freund_growth::*;
 pub use growth::*;
+pub use kinks::*;
 pub use references::*;
 
 use fracture_api::Scene;

@@ -16,6 +16,7 @@
 mod claims;
 mod cohesive;
 mod figures;
+pub mod kinks;
 mod measure;
 mod report;
 mod sweeps;
@@ -106,11 +107,18 @@ pub struct StudyArgs {
 pub enum StudyKind {
     /// The seed's Rosakis shear-crack sweeps (impact velocity, J_Ic, friction).
     Rosakis,
+    /// Kinked crack paths under the default growth law (pure-shear plate, Kalthoff–Winkler):
+    /// `kinks.md`.
+    Kinks,
 }
 
 /// `fracture study`.
 pub fn study(a: StudyArgs) -> ExitCode {
-    match rosakis(&a) {
+    let done = match a.kind {
+        StudyKind::Rosakis => rosakis(&a),
+        StudyKind::Kinks => kinks::run(&a).map(|_| ()),
+    };
+    match done {
         Ok(()) => ExitCode::SUCCESS,
         Err(e) => {
             eprintln!("error: {e:#}");
