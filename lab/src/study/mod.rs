@@ -16,7 +16,7 @@
 mod claims;
 mod cohesive;
 mod figures;
-pub mod kinks;
+mod growth;
 mod measure;
 mod report;
 mod sweeps;
@@ -39,7 +39,7 @@ use sweeps::{sweeps, variant_scene};
 /// Arguments of `fracture study`.
 #[derive(clap::Args, Debug)]
 pub struct StudyArgs {
-    /// Which study (only `rosakis` so far).
+    /// Which study.
     #[arg(value_enum, default_value_t = StudyKind::Rosakis)]
     pub kind: StudyKind,
     /// The base scene of the sweeps.
@@ -100,6 +100,15 @@ pub struct StudyArgs {
     /// 8 million particles, about 15 min on 2 threads, `docs/scene-extensions.md`).
     #[arg(long, default_value_t = 2.5e-4)]
     pub cohesive_min_cell: f64,
+    /// `growth`: J domain radius (m) of the regularisation held fixed in physical units.
+    #[arg(long, default_value_t = 3.0e-3)]
+    pub j_radius: f64,
+    /// `growth`: process-zone length (m) of the fixed regularisation.
+    #[arg(long, default_value_t = 1.0e-3)]
+    pub zone: f64,
+    /// `growth`: filter time (s) of the fixed regularisation.
+    #[arg(long, default_value_t = 1.2e-6)]
+    pub filter_time: f64,
 }
 
 /// The studies of `fracture study`.
@@ -107,16 +116,16 @@ pub struct StudyArgs {
 pub enum StudyKind {
     /// The seed's Rosakis shear-crack sweeps (impact velocity, J_Ic, friction).
     Rosakis,
-    /// Kinked crack paths under the default growth law (pure-shear plate, Kalthoff–Winkler):
-    /// `kinks.md`.
-    Kinks,
+    /// Crack growth against known transients (Freund's step wave at constant Γ, the strip
+    /// with fixed grips): `growth.md`.
+    Growth,
 }
 
 /// `fracture study`.
 pub fn study(a: StudyArgs) -> ExitCode {
     let done = match a.kind {
         StudyKind::Rosakis => rosakis(&a),
-        StudyKind::Kinks => kinks::run(&a).map(|_| ()),
+        StudyKind::Growth => growth::run(&a),
     };
     match done {
         Ok(()) => ExitCode::SUCCESS,

@@ -570,6 +570,9 @@ mod tests {
             cohesive_only: false,
             cohesive_scene: scenes.join("rosakis-shear-cohesive.json"),
             cohesive_min_cell: 2.5e-4,
+            j_radius: 3.0e-3,
+            zone: 1.0e-3,
+            filter_time: 1.2e-6,
         };
         let sweeps = sweeps(&a).expect("the scenes are readable");
         let mut results = HashMap::new();
