@@ -17,6 +17,7 @@ mod claims;
 mod cohesive;
 mod figures;
 mod growth;
+pub mod kinks;
 mod measure;
 mod report;
 mod sweeps;
@@ -116,6 +117,9 @@ pub struct StudyArgs {
 pub enum StudyKind {
     /// The seed's Rosakis shear-crack sweeps (impact velocity, J_Ic, friction).
     Rosakis,
+    /// Kinked crack paths under the default growth law (pure-shear plate, Kalthoff–Winkler):
+    /// `kinks.md`.
+    Kinks,
     /// Crack growth against known transients (Freund's step wave at constant Γ, the strip
     /// with fixed grips): `growth.md`.
     Growth,
@@ -125,6 +129,7 @@ pub enum StudyKind {
 pub fn study(a: StudyArgs) -> ExitCode {
     let done = match a.kind {
         StudyKind::Rosakis => rosakis(&a),
+        StudyKind::Kinks => kinks::run(&a).map(|_| ()),
         StudyKind::Growth => growth::run(&a),
     };
     match done {
