@@ -92,8 +92,7 @@ fn a_growing_crack_needs_three_cells_across_its_physical_ring() {
     let growing = |h: f64| {
         let mut v = plate();
         v["grid"]["cell_size"] = json!(h);
-        v["cracks"][0]["propagation"] =
-            json!({"criterion": "energy_release", "toughness": 10.0});
+        v["cracks"][0]["propagation"] = json!({"criterion": "energy_release", "toughness": 10.0});
         v
     };
     let fine = scene_from_value(growing(0.0005)).expect("parses");
@@ -103,7 +102,11 @@ fn a_growing_crack_needs_three_cells_across_its_physical_ring() {
         JIntegral::Contour { .. } => f64::NAN,
     };
     assert!((ring(&fine) - 0.0025).abs() < 1e-12, "{}", ring(&fine));
-    assert_eq!(ring(&fine), ring(&coarse), "the default ring follows the cell");
+    assert_eq!(
+        ring(&fine),
+        ring(&coarse),
+        "the default ring follows the cell"
+    );
     assert_eq!(problems(growing(0.0005)), Vec::<String>::new());
     let p = problems(growing(0.001));
     assert_eq!(p.len(), 1, "{p:?}");

@@ -331,7 +331,7 @@ fn edge_crack_runs_from_the_command_line() {
 #[test]
 fn benchmark_scenes_match_their_builders() {
     let built = fracture_verify::benchmark_scenes(&fracture_verify::Settings::at(0.001)).unwrap();
-    assert_eq!(built.len(), 3);
+    assert_eq!(built.len(), 5);
     for (name, scene) in built {
         let (file, _) = load(name);
         assert_eq!(

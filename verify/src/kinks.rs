@@ -16,8 +16,8 @@ use fracture_solver::{Simulation, SolverConfig};
 use crate::*;
 
 /// The regularisations of the growth law a path scene may fix, in metres and seconds
-/// (`algorithm.md` pitfall 13); `None` keeps the solver's default (J domain of 6 cells,
-/// process zone a third of it, filter time 3h/c_S).
+/// (`algorithm.md` pitfall 13); `None` keeps the solver's default (J domain of 1/16 of the
+/// shortest body side, process zone a third of it, filter time R/(2c_S)).
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct PathOverrides {
     /// Outer radius of the J domain (m).
@@ -448,6 +448,16 @@ pub mod bounds {
     /// Largest difference of the Kalthoff–Winkler 10 mm angle between 1 mm and 0.5 mm cells
     /// (degrees).
     pub const KALTHOFF_CELL_SPREAD: f64 = 8.0;
+}
+
+impl PathProblem {
+    /// The scene with its expected angle as a [`Built`] (the shipped benchmark scenes).
+    pub fn into_built(self) -> Built {
+        Built {
+            scene: self.scene,
+            reference: self.angle,
+        }
+    }
 }
 
 #[cfg(test)]

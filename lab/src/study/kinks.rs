@@ -331,7 +331,7 @@ impl Page<'_> {
              angle at which it leaves (`algorithm.md` pitfall 15: right after a kink the J domain \
              still holds the parent crack's field and the kinked tip can stall). Both scenes grow \
              by maximum hoop stress with the default `equation_of_motion` speed and the solver's \
-             default J domain (6 cells), process zone and filter time, at 1 mm and 0.5 mm cells. \
+             default J domain (1/16 of the shortest body side: 6.5 mm and 6.25 mm), process zone (a third of it) and filter time (R/(2c_S)), all fixed in metres and seconds, at 1 mm and 0.5 mm cells. \
              Built by `fracture_verify::shear_kink_path` and `kalthoff_winkler_path`, measured by \
              `fracture_verify::run_path`; `verify/tests/kinked_paths.rs` checks the same bounds at \
              1 mm.\n\n\

@@ -599,7 +599,12 @@ mod tests {
                     doc["cracks"][0]["propagation"]["speed"].as_str(),
                     Some(v.law.json())
                 );
-                assert_eq!(doc["cracks"][0]["j_integral"]["radius"].as_f64(), v.radius);
+                // A variant without its own radius keeps the scene's (6 mm, fixed in metres).
+                let scene_radius = base["cracks"][0]["j_integral"]["radius"].as_f64();
+                assert_eq!(
+                    doc["cracks"][0]["j_integral"]["radius"].as_f64(),
+                    v.radius.or(scene_radius)
+                );
                 assert_eq!(doc["output"]["snapshot_interval"].as_f64(), Some(0.0));
                 assert_eq!(doc["bodies"], base["bodies"]);
                 assert_eq!(

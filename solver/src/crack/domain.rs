@@ -41,20 +41,29 @@ pub(super) struct DomainResult {
 }
 
 /// Radius ε of the disk around the tip, in cells (at most half the ring), left out of the
-/// inertial area term ∫ ρ(ü·∂u/∂x_k − u̇·∂u̇/∂x_k) q dA, as in Nishioka and Atluri's J′
-/// (the integral over A − A_ε, ε → 0; here with h). Its integrand vanishes at the tip of a
-/// crack running steadily (u̇ = −v ∂u/∂x1 in the tip frame) and is integrable, O(ε²) over the
-/// disk, at a stationary one; the discrete one within a few cells of a moving tip is instead
-/// the tip's passage through the grid. In the reduced Rosakis scene (J_Ic = 25 J/m², 1 and
-/// 0.5 mm) it swung a running tip's J1 by ±300 J/m², 51–55 % of the samples below −0.1 Γ;
-/// with the disk left out, none are. Freund's stationary crack (0.5 mm, rings 3 and 6 mm):
-/// J1 within 4 % of K²(1 − ν²)/E at every sample, mean −1.0 % (+0.4 % integrating the disk).
+/// inertial area term ∫ ρ(ü·∂u/∂x_k − u̇·∂u̇/∂x_k) q dA (Nishioka and Atluri's J′ over
+/// A − A_ε, ε → 0; here with h). Its integrand vanishes at a steadily running tip
+/// (u̇ = −v ∂u/∂x1) and is integrable at a stationary one; the discrete one within a few cells
+/// of a moving tip is the tip's passage through the grid. In the reduced Rosakis scene
+/// (J_Ic = 25 J/m², 1 and 0.5 mm) it swung a running tip's J1 by ±300 J/m²; with the disk
+/// left out, no sample fell below −0.1 Γ. Freund's stationary crack (0.5 mm, rings 3 and
+/// 6 mm): J1 within 4 % of K²(1 − ν²)/E at every sample.
+///
+/// **An open regularisation in cells (issue 34, pitfall 13).** It shrinks with h, so the
+/// J it gives converges to Moran & Shih's as h → 0, but at a given h it is part of what a fast
+/// tip receives: on Freund's step wave with growth (Γ reached 2.25 µs after the wave,
+/// 0.5 mm cells, ring 3.75 mm, `fracture run`, 2026-12-05) J1 over Freund's (1 − v/c_R)G* while
+/// the tip ran at 0.8–0.9 c_R was 1.86 with 3 cells, 1.36 with 1 and 0.96 with none (1.03 at
+/// 0.25 mm), 0.93 with 3 cells and the process zone off: the zone inside the disk is what
+/// the excess comes from. Without the disk, though, Kalthoff–Winkler's kinked crack arrested
+/// after 18.5 mm (J1 ≈ 12 kJ/m² against 22) where it grows through the plate with it, the
+/// damped DCB ran 11.9 % off beam theory (+2.0 % with it), and the Rosakis tip at the speed
+/// cap read 411 / 341 / 109 J/m² on rings of 1.5 / 3 / 6 mm: the disk stays until a
+/// physical replacement passes all of them.
 ///
 /// The disk's edge is a smooth step ([`inertia_weight`]), not a cut: with a cut, every
-/// particle that crosses r = ε as the tip runs switches its whole inertial term on or off,
-/// and J1 of a tip running at c_R (reduced Rosakis scene, 0.25 mm cells, J_Ic = 25 J/m²)
-/// swung by tens of J/m² with the period of the tip's crossing of a cell: 23 of 229 running
-/// samples below −0.1 Γ with the cut, 10 with the smooth edge (`fracture run`, 2026-12-03).
+/// particle that crosses r = ε as the tip runs switches its whole inertial term on or off
+/// (J1 of a tip at c_R swung with the period of a cell crossing).
 pub(super) const INERTIA_EXCLUSION_CELLS: f64 = 3.0;
 
 /// Half-width of the smooth edge of the inertial disk, as a fraction of ε: the weight rises

@@ -253,13 +253,18 @@ impl Cracks {
     /// s (`TipState::kink_at`) shorter than R/2, the vertex in the parent's frame (the
     /// kinked-crack solution drives the tip, pitfall 15); between R/2 and R, on the tip with
     /// the radius s, so that the vertex stays out of the ring; otherwise on the tip.
+    ///
+    /// Open: on the pure-shear plate the branches stall for ~60 µs once they pass R/2 (the
+    /// ring of radius s reads J1 ≈ 0.05 Γ) and then grow in bursts. Keeping the vertex until
+    /// R removed the stall but arrested Kalthoff–Winkler's crack after 12.7 mm (1 mm cells;
+    /// 80–90 mm with this rule), so the rule stays until one passes both (`docs/kinks.md`).
     fn centre(&self, ci: usize, t: usize, radius: f64) -> Centre {
         let c = &self.cracks[ci];
         let Some(at) = c.tips[t].kink_at else {
             return Centre::Tip(radius);
         };
         let s = c.tips[t].advance - at;
-        if !(s > 0.0) || s >= radius {
+        if s.is_nan() || s <= 0.0 || s >= radius {
             return Centre::Tip(radius);
         }
         if s >= 0.5 * radius {
@@ -302,7 +307,7 @@ impl Cracks {
         let xp = at_k(parent.unwrap_or(n - 1));
         let d = sub(xv, xp);
         let l = d[0].hypot(d[1]);
-        if iv == 0 || !(l > 0.0) {
+        if iv == 0 || l.is_nan() || l <= 0.0 {
             return Centre::Tip(radius);
         }
         Centre::Vertex(xv, [d[0] / l, d[1] / l])

@@ -89,7 +89,12 @@ pub(crate) fn at_speed_wall(v: f64, c_r: f64) -> bool {
 /// G*/Γ. Relaxing on the raw balance, dv/dt = (c_R/τ)(G_f − Γ)/Γ (this law before), has the
 /// gain G*/Γ instead — 20 to 300 on the Rosakis bond — and oscillated between 470 m/s and
 /// c_R once the grid resolved the fall of G_f with speed; jumping to v_t at once (the law
-/// before that) ran away to c_R or rest.
+/// before that) ran away to c_R or rest. Measured again on Freund's step wave with growth
+/// (issue 34, 0.5 mm cells, ring 3.75 mm, τ = R/(2c_S) = 1.5 µs, J without the inertial disk of
+/// `domain::INERTIA_EXCLUSION_CELLS`, `fracture run`): relaxing over
+/// 0.3τ or jumping at once ran the fastest case at 0.97–1.0 c_R with J1 5–380 times Freund's
+/// (1 − v/c_R)G*; with the process zone off, jumping at once did not run away (−6 % of the
+/// 1 − v/c_R reference) — the zone's J1 rises with the tip's speed, and τ is what holds it.
 pub(crate) fn eom_speed(
     g_filtered: f64,
     v_prev: f64,
