@@ -117,14 +117,14 @@ fn freund_fastest(reg: &Regularisation) {
 
 /// [`freund_fastest`] under the solver's default regularisation.
 #[test]
-#[ignore = "issue 34, at 56306de: initiation 4.02 µs vs t_f 2.37 (1.65 late), last-third speed 1089 m/s vs exact g 969 (+12.3 %)"]
+#[ignore = "issue 34: initiation 2.65 µs vs t_f 2.37 (passes), last-third speed 1082 m/s vs exact g 969 (+11.6 %), J1/(gG*) 2.31; at 56306de initiation 4.02 µs, +12.3 %"]
 fn freund_growth_fastest_case_follows_the_exact_reference() {
     freund_fastest(&Regularisation::default());
 }
 
 /// [`freund_fastest`] with the regularisation held at J ring 3 mm, zone 1 mm, filter 1.2 µs.
 #[test]
-#[ignore = "issue 34, at 56306de: initiation 3.82 µs vs t_f 2.37 (1.45 late), last-third speed 1111 m/s vs exact g 969 (+14.6 %)"]
+#[ignore = "issue 34: initiation 2.65 µs vs t_f 2.37 (passes), last-third speed 1107 m/s vs exact g 969 (+14.2 %), J1/(gG*) 3.17; at 56306de initiation 3.82 µs, +14.6 %"]
 fn freund_growth_fastest_case_with_fixed_regularisation() {
     freund_fastest(&physical());
 }
@@ -134,7 +134,7 @@ fn freund_growth_fastest_case_with_fixed_regularisation() {
 /// the 20.5 mm strip height, spans under 3 cells at 0.5 mm and validation refuses it): the
 /// steady speed (slope of the advance over the last third of the run) within 7 % of v*.
 #[test]
-#[ignore = "issue 34, at 56306de: steady speed 528 m/s vs v* 703 (-24.9 %); the law's speed there 582 ± 128 m/s"]
+#[ignore = "issue 34: steady speed 572 m/s vs v* 703 (-18.7 %); at 56306de 528 m/s (-24.9 %), the law's speed there 582 ± 128 m/s"]
 fn strip_runs_at_the_speed_where_toughness_meets_g_infinity() {
     let st = strip_fixed_grips(&Settings::at(0.0005), 0.6, &physical()).unwrap();
     let r = run_strip(&st, config()).unwrap();
