@@ -29,6 +29,11 @@ const TOL_NEGATIVE_J: f64 = 0.02;
 /// limits the speed to 0.999 c_R, and a tip driven there (G* ≫ Γ) is within a few per cent of
 /// it from soon after initiation.
 const FAST: f64 = 0.9;
+/// A run whose new surface took more than this share of the fracture energy it requires above
+/// Γ, at the speed wall (`summary.fracture.at_speed_limit`), ran at the law's cap: its speed is
+/// the limit's, which any cell size meets by itself, so it is flagged and not counted as
+/// converged (issue 34; `algorithm.md` pitfall 13).
+const CAP_SHARE: f64 = 0.05;
 /// The three rings' mean J1 of a free tip are taken over the running samples from this long
 /// (s) after initiation: past the start-up, where J rises from Γ(0).
 const RING_DELAY: f64 = 2.0e-6;
@@ -308,6 +313,38 @@ impl Report<'_> {
             &["seed's claim", "rule", "measured", "verdict"],
             &rows,
         ));
+        // Which of these runs ran at the cap: their speeds are the law's limit, not the grid's
+        // or the material's answer (issue 34).
+        let (mut capped, mut all) = (Vec::new(), 0usize);
+        for sw in self.sweeps.iter().filter(|x| x.scale == scale && x.law == law) {
+            for v in &sw.runs {
+                let Some(m) = self.get(sw, v) else { continue };
+                all += 1;
+                if at_cap(m) {
+                    capped.push(format!(
+                        "{} {} ({:.0} %)",
+                        sw.id,
+                        (sw.legend)(v),
+                        100.0 * above_gamma(m).unwrap_or(0.0)
+                    ));
+                }
+            }
+        }
+        if all > 0 && capped.is_empty() {
+            let _ = writeln!(
+                md,
+                "\n*At the cap*: none of these {all} runs took more than {:.0} % of its fracture energy above Γ at the speed wall.",
+                CAP_SHARE * 100.0
+            );
+        } else if all > 0 {
+            let _ = writeln!(
+                md,
+                "\n*At the cap*: {} of these {all} runs took more than {:.0} % of their fracture energy above Γ at the speed wall ({}): where a verdict rests on their speeds, it rests on the law's limit of 0.999 c_R, not on the physics.",
+                capped.len(),
+                CAP_SHARE * 100.0,
+                capped.join("; ")
+            );
+        }
     }
 
     /// The run of the convergence sweeps under `law` at J_Ic `j`, cell size `h` and J radius
@@ -342,17 +379,22 @@ impl Report<'_> {
             md,
             "\n## Convergence on the reduced scene\n\n\
              `{}` at 25 m/s, frictionless, 30 µs, 2×2 particles per cell, with the bond moved to mid-cell of each \
-             grid. *Mean speed*: the tip's x from the first growing sample to the end of the run, over that time. The \
-             cell-size table uses the default J ring (radius 6 cells, process zone 2 cells); the radius table gives \
-             the radius in cells of its grid (the zone is a third of it; the filter time stays the default 3 cells \
-             of shear-wave transit). Changes are relative to the coarser cell or the \
+             grid. *Mean speed*: the tip's x from the first growing sample to the end of the run, over that time. Every \
+             regularisation of the tip law is held fixed in metres and seconds while the cell size changes: the \
+             cell-size table uses the scene's J ring of 6 mm (process zone a third of it, 2 mm; filter time R/(2 c_S), \
+             2.4 µs); the radius tables run the same radii in millimetres at each cell size (zone and filter follow \
+             the radius), so each column is one model at two cell sizes. Changes are relative to the coarser cell or the \
              smaller radius. The acceptance bounds (issue 16): 1 vs 0.5 mm within {:.0} %, 0.5 vs 0.25 mm within \
-             {:.0} %, two radii within {:.0} %, fewer than {:.0} % of running samples with J1 < −0.1 Γ. {}\n",
+             {:.0} %, two radii within {:.0} %, fewer than {:.0} % of running samples with J1 < −0.1 Γ. *At the cap* \
+             (issue 34): a run whose new surface took more than {:.0} % of the fracture energy it requires above Γ, at \
+             the speed wall, ran at the law's limit of 0.999 c_R, which any cell size meets by itself; a row holding \
+             one is not counted as converged. {}\n",
             self.a.mini.display(),
             TOL_COARSE * 100.0,
             TOL_FINE * 100.0,
             TOL_RADIUS * 100.0,
             TOL_NEGATIVE_J * 100.0,
+            CAP_SHARE * 100.0,
             impact_region_note(&self.a.mini)
         );
         let mut conclusions: Vec<String> = Vec::new();
@@ -361,12 +403,13 @@ impl Report<'_> {
         let mut rows = Vec::new();
         for law in [Law::Motion, Law::Wave] {
             for j in CONV_J {
-                let v: Vec<Option<f64>> = CELLS
+                let runs: Vec<Option<&Measured>> = CELLS
                     .iter()
-                    .map(|&h| {
-                        self.conv_run(law, j, h, None)
-                            .and_then(Measured::mean_to_end)
-                    })
+                    .map(|&h| self.conv_run(law, j, h, None))
+                    .collect();
+                let v: Vec<Option<f64>> = runs
+                    .iter()
+                    .map(|m| m.and_then(Measured::mean_to_end))
                     .collect();
                 if v.iter().all(Option::is_none) {
                     continue;
@@ -376,13 +419,15 @@ impl Report<'_> {
                     (Some(a), Some(b)) => Some(a.abs() <= TOL_COARSE && b.abs() <= TOL_FINE),
                     _ => None,
                 };
+                let verdict = cap_verdict(&runs, met_label(met));
                 let mut row = vec![format!("{j} J/m²"), law.label().to_string()];
                 row.extend(
                     v.iter()
                         .map(|x| x.map_or("–".into(), |x| format!("{x:.0}"))),
                 );
                 row.extend(ch.iter().map(|c| pct(*c)));
-                row.push(met_label(met));
+                row.push(above_cell(&runs));
+                row.push(verdict.clone());
                 rows.push(row);
                 let sizes: Vec<String> = CELLS
                     .iter()
@@ -396,7 +441,7 @@ impl Report<'_> {
                     pct(ch[0]),
                     pct(ch[1]),
                     ch[2].map_or(String::new(), |c| format!(", 0.25 → 0.125 mm {}", pct(Some(c)))),
-                    met_label(met)
+                    verdict
                 ));
             }
         }
@@ -411,7 +456,8 @@ impl Report<'_> {
                 "1 → 0.5 mm",
                 "0.5 → 0.25 mm",
                 "0.25 → 0.125 mm",
-                "1 vs 0.5 within 10 %, 0.5 vs 0.25 within 5 %",
+                "energy above Γ, most",
+                "1 vs 0.5 within 10 %, 0.5 vs 0.25 within 5 %, none at the cap",
             ],
             &rows,
         ));
@@ -423,24 +469,26 @@ impl Report<'_> {
         let mut rows = Vec::new();
         for j in CONV_J {
             for h in RADIUS_CELLS {
-                let v: Vec<Option<f64>> = RADII
+                let runs: Vec<Option<&Measured>> = RADII
                     .iter()
-                    .map(|&n| {
-                        self.conv_run(Law::Motion, j, h, Some(n * h))
-                            .and_then(Measured::mean_to_end)
-                    })
+                    .map(|&n| self.conv_run(Law::Motion, j, h, Some(n)))
+                    .collect();
+                let v: Vec<Option<f64>> = runs
+                    .iter()
+                    .map(|m| m.and_then(Measured::mean_to_end))
                     .collect();
                 if v.iter().all(Option::is_none) {
                     continue;
                 }
                 let ch: Vec<Option<f64>> = v.windows(2).map(|w| change(w[0], w[1])).collect();
-                let verdict = radius_verdict(&ch);
+                let verdict = cap_verdict(&runs, radius_verdict(&ch));
                 let mut row = vec![format!("{j} J/m²"), mm(h)];
                 row.extend(
                     v.iter()
                         .map(|x| x.map_or("–".into(), |x| format!("{x:.0}"))),
                 );
                 row.extend(ch.iter().map(|c| pct(*c)));
+                row.push(above_cell(&runs));
                 row.push(verdict.clone());
                 rows.push(row);
                 conclusions.push(format!(
@@ -450,8 +498,8 @@ impl Report<'_> {
                         .map(|x| x.map_or("–".into(), |x| format!("{x:.0}")))
                         .collect::<Vec<_>>()
                         .join(" / "),
-                    RADII.iter().map(|n| format!("{n}")).collect::<Vec<_>>().join(" / ") + " cells",
-                    RADII.iter().map(|n| mm(n * h)).collect::<Vec<_>>().join(" / "),
+                    RADII.iter().map(|&n| mm(n)).collect::<Vec<_>>().join(" / "),
+                    RADII.iter().map(|&n| format!("{:.1}", n / h)).collect::<Vec<_>>().join(" / ") + " cells",
                     ch.iter().map(|c| pct(*c)).collect::<Vec<_>>().join(", "),
                     verdict
                 ));
@@ -667,13 +715,12 @@ impl Report<'_> {
         ));
         // Radius.
         let h = FREE_RADIUS_CELL;
-        let v: Vec<Option<f64>> = RADII
-            .iter()
-            .map(|&n| speed(self.free_run(h, Some(n * h))))
-            .collect();
+        let runs: Vec<Option<&Measured>> =
+            RADII.iter().map(|&n| self.free_run(h, Some(n))).collect();
+        let v: Vec<Option<f64>> = runs.iter().map(|m| speed(*m)).collect();
         if v.iter().any(Option::is_some) {
             let ch: Vec<Option<f64>> = v.windows(2).map(|w| change(w[0], w[1])).collect();
-            let verdict = radius_verdict(&ch);
+            let verdict = cap_verdict(&runs, radius_verdict(&ch));
             let _ = writeln!(
                 md,
                 "\n### Crack speed against the J domain radius (m/s, {} cells)\n",
@@ -683,17 +730,14 @@ impl Report<'_> {
             let header: Vec<&str> = header.iter().map(String::as_str).collect();
             let mut row: Vec<String> = v.iter().map(|x| fmt(*x)).collect();
             row.extend(ch.iter().map(|c| pct(*c)));
+            row.push(above_cell(&runs));
             row.push(verdict.clone());
             md.push_str(&markdown_table(&header, &[row]));
             conclusions.push(format!(
-                "**J radius, free tip, {} cells**: {} m/s at radius {} cells; changes {}: {}.",
+                "**J radius, free tip, {} cells**: {} m/s at radius {}; changes {}: {}.",
                 mm(h),
                 v.iter().map(|x| fmt(*x)).collect::<Vec<_>>().join(" / "),
-                RADII
-                    .iter()
-                    .map(|n| format!("{n}"))
-                    .collect::<Vec<_>>()
-                    .join(" / "),
+                RADII.iter().map(|&n| mm(n)).collect::<Vec<_>>().join(" / "),
                 ch.iter().map(|c| pct(*c)).collect::<Vec<_>>().join(", "),
                 verdict
             ));
@@ -721,7 +765,7 @@ impl Report<'_> {
                 rows.push(vec![
                     sw.id.clone(),
                     v.h.map_or("scene".into(), mm),
-                    v.radius.map_or("6 cells".into(), mm),
+                    v.radius.map_or("6 mm (scene)".into(), mm),
                     m.initiation_label(),
                     m.mean_to_end()
                         .map_or("–".into(), |x| format!("{x:.0} m/s")),
@@ -831,13 +875,14 @@ fn met_label(met: Option<bool>) -> String {
 /// The columns of a radius table after its labels: the speed at each radius of [`RADII`], the
 /// change between neighbours, the verdict.
 fn radius_columns() -> Vec<String> {
-    let mut c: Vec<String> = RADII.iter().map(|n| format!("r = {n} cells")).collect();
+    let mut c: Vec<String> = RADII.iter().map(|&n| format!("r = {}", mm(n))).collect();
     c.extend(
         RADII
             .windows(2)
-            .map(|w| format!("{} → {} cells", w[0], w[1])),
+            .map(|w| format!("{} → {}", mm(w[0]), mm(w[1]))),
     );
-    c.push("two radii within 5 %".into());
+    c.push("energy above Γ, most".into());
+    c.push("two radii within 5 %, none at the cap".into());
     c
 }
 
@@ -850,7 +895,7 @@ fn radius_verdict(ch: &[Option<f64>]) -> String {
         .iter()
         .map(|c| c.is_some_and(|c| c.abs() <= TOL_RADIUS))
         .collect();
-    let pair = |i: usize| format!("{} and {} cells", RADII[i], RADII[i + 1]);
+    let pair = |i: usize| format!("{} and {}", mm(RADII[i]), mm(RADII[i + 1]));
     if ok.iter().all(|&x| x) {
         "met (all radii)".into()
     } else if ok.iter().any(|&x| x) {
@@ -881,7 +926,7 @@ fn last_advance(m: &Measured, span: f64) -> f64 {
 }
 
 /// The header of the table of every convergence run.
-const CONV_HEADER: [&str; 14] = [
+const CONV_HEADER: [&str; 15] = [
     "sweep",
     "J_Ic",
     "law",
@@ -895,8 +940,46 @@ const CONV_HEADER: [&str; 14] = [
     "running samples with J1 < −0.1 J_Ic",
     "fracture energy required / dissipated",
     "dissipated / required",
+    "above Γ / required",
     "wall",
 ];
+
+/// The share of the fracture energy a run's new surface requires that it took above Γ at the
+/// speed wall; None without growth.
+fn above_gamma(m: &Measured) -> Option<f64> {
+    m.fracture
+        .filter(|f| f.required > 0.0)
+        .map(|f| f.at_speed_limit / f.required)
+}
+
+/// Whether a run ran at the law's cap (more than [`CAP_SHARE`] of its fracture energy taken
+/// above Γ).
+fn at_cap(m: &Measured) -> bool {
+    above_gamma(m).is_some_and(|s| s > CAP_SHARE)
+}
+
+/// A convergence verdict that does not count runs at the cap: "at the cap" when any run of
+/// the row ran there, else the verdict from the changes.
+fn cap_verdict(runs: &[Option<&Measured>], verdict: String) -> String {
+    let capped = runs.iter().flatten().filter(|m| at_cap(m)).count();
+    if capped > 0 {
+        format!(
+            "at the cap ({capped} of {} runs): not a convergence",
+            runs.iter().flatten().count()
+        )
+    } else {
+        verdict
+    }
+}
+
+/// The largest share of energy above Γ over a row's runs, as a table cell.
+fn above_cell(runs: &[Option<&Measured>]) -> String {
+    runs.iter()
+        .flatten()
+        .filter_map(|m| above_gamma(m))
+        .reduce(f64::max)
+        .map_or("–".into(), |s| format!("{:.0} %", 100.0 * s))
+}
 
 /// The share of running samples at ≥ [`FAST`]·c_R, as a table cell.
 fn fast_cell(m: &Measured, c_r: f64) -> String {
@@ -916,7 +999,7 @@ fn conv_row(sw: &Sweep, v: &Variant, m: &Measured, c_r: f64) -> Vec<String> {
         format!("{}", v.j_ic),
         v.law.label().into(),
         v.h.map_or("scene".into(), mm),
-        v.radius.map_or("6 cells".into(), mm),
+        v.radius.map_or("6 mm (scene)".into(), mm),
         m.initiation_label(),
         m.mean_to_end()
             .map_or("–".into(), |x| format!("{x:.0} m/s")),
@@ -930,6 +1013,13 @@ fn conv_row(sw: &Sweep, v: &Variant, m: &Measured, c_r: f64) -> Vec<String> {
             .map_or("–".into(), |f| {
                 format!("{:.2}", f.dissipated / f.required)
             }),
+        above_gamma(m).map_or("–".into(), |s| {
+            format!(
+                "{:.0} %{}",
+                100.0 * s,
+                if at_cap(m) { " (at the cap)" } else { "" }
+            )
+        }),
         format!("{:.0} s", m.wall),
     ]
 }
@@ -971,11 +1061,11 @@ mod tests {
         );
         assert_eq!(
             radius_verdict(&[Some(-0.09), Some(-0.015), Some(-0.08)]),
-            "met for 6 and 8 cells only"
+            "met for 4.5 mm and 6 mm only"
         );
         assert_eq!(
             radius_verdict(&[Some(0.01), Some(-0.09), Some(-0.02)]),
-            "met for 4 and 6 cells; 8 and 12 cells only"
+            "met for 3 mm and 4.5 mm; 6 mm and 9 mm only"
         );
         assert_eq!(
             radius_verdict(&[Some(0.09), Some(0.2), Some(0.3)]),

@@ -394,7 +394,7 @@ impl Report<'_> {
             md,
             "## Two growth laws\n\n\
              - **Equation of motion** (`\"speed\": \"equation_of_motion\"`, the product's default): the tip moves \
-             v·Δt per step, the speed relaxing over `filter_time` (default 3h/c_S) towards the speed at which \
+             v·Δt per step, the speed relaxing over `filter_time` (default R/(2 c_S) for the J ring's radius R; a tip starts on its unfiltered J) towards the speed at which \
              Freund's g(v)·G* = Γ(v) would hold for the measured dynamic energy release rate (the J1 of the domain \
              integral filtered over `filter_time`, G* = J1/g(v)), so that in steady state J1 = Γ(v); a process zone behind the tip dissipates the \
              fracture energy Γ per unit new area (`docs/scene-extensions.md`). For a tip-only law g(v) → 0 as v → c_R, \
@@ -463,8 +463,10 @@ impl Report<'_> {
              ramped over 1 µs, for the projectile's pulse 2L_p/c_steel ≈ 30 µs (75 mm steel projectile); \
              after that the patch is free. The seed does not state how it loads the edge; a prescribed velocity \
              over the pulse is the impedance-matching idealisation of `reference-solutions.md`.\n\
-             - Propagation: J1 of the domain integral (default ring radius 6 cells, process zone a third of it, filter \
-             time 3 cells of shear-wave transit) against J_Ic, under the law the run names.\n\
+             - Propagation: J1 of the domain integral against J_Ic, under the law the run names. The ring is the \
+             default for a crack growing by the equation of motion, 1/16 of the block's shorter side (7.8 mm), the \
+             process zone a third of it and the filter time R/(2 c_S) (3.1 µs), the same in metres and seconds at \
+             every cell size (issue 34).\n\
              - Crack faces: frictionless or Coulomb friction μ, as the sweep says.\n\
              - Fringes: plate thickness 9.5 mm and f_σ = 23 kN/m (one fringe ≈ 2.4 MPa).\n"
         );

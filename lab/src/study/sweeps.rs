@@ -26,10 +26,12 @@ pub(super) const P_CELL: &str = "grid.cell_size";
 
 /// The cell sizes (m) of the convergence table on the reduced scene.
 pub(super) const CELLS: [f64; 4] = [1.0e-3, 0.5e-3, 0.25e-3, 0.125e-3];
-/// The J domain radii of the radius table, in cells of the run's grid (the default ring is 6
-/// cells; the equation of motion's default filter time is 3 cells of shear-wave transit, so
-/// at one cell size every radius runs with the same filter).
-pub(super) const RADII: [f64; 4] = [4.0, 6.0, 8.0, 12.0];
+/// The J domain radii (m) of the radius tables, held fixed in metres at every cell size (the
+/// reduced scene names 6 mm; the process zone is a third of the radius and the equation of
+/// motion's filter time R/(2 c_S), so each radius is a different regularisation and each
+/// column of the table is one regularisation at two cell sizes). 3 mm spans the 3 cells a
+/// growing ring needs at 1 mm cells.
+pub(super) const RADII: [f64; 4] = [3.0e-3, 4.5e-3, 6.0e-3, 9.0e-3];
 /// The cell sizes (m) of the radius table.
 pub(super) const RADIUS_CELLS: [f64; 2] = [1.0e-3, 0.5e-3];
 /// The toughnesses (J/m²) of both convergence tables: the two ends of the seed's sweep.
@@ -90,7 +92,8 @@ pub(super) struct Variant {
     pub(super) law: Law,
     /// Cell size (m), if not the scene's: the bond then moves to mid-cell ([`mid_cell_y`]).
     pub(super) h: Option<f64>,
-    /// J domain radius (m), if not the default (6 cells).
+    /// J domain radius (m), if not the scene's (the reduced scene names 6 mm; the others take
+    /// the default, 1/16 of the block's shorter side).
     pub(super) radius: Option<f64>,
     /// Fringe snapshots every 5 µs (off for the convergence runs).
     pub(super) snapshots: bool,
@@ -370,7 +373,7 @@ fn seed_sweeps(scene: &Path, scale: Scale, law: Law, cells: &str) -> Vec<Sweep> 
 /// The convergence sweeps on the reduced scene at its own end time: for each law and
 /// J_Ic the cell sizes of [`CELLS`] down to `min_cell` (0.125 mm under the equation of motion
 /// only: the decisive cases), and for the equation of motion the radii of [`RADII`] at each
-/// cell size of [`RADIUS_CELLS`] (radius = cells × h).
+/// cell size of [`RADIUS_CELLS`] (the same radii in metres at each).
 pub(super) fn convergence_sweeps(mini: &Path, min_cell: f64) -> Vec<Sweep> {
     let run = |j_ic, law, h, radius| Variant {
         v: 25.0,
@@ -422,7 +425,7 @@ pub(super) fn convergence_sweeps(mini: &Path, min_cell: f64) -> Vec<Sweep> {
                 end: Some(3.0e-5),
                 runs: RADII
                     .iter()
-                    .map(|&n| run(j, Law::Motion, h, Some(n * h)))
+                    .map(|&r| run(j, Law::Motion, h, Some(r)))
                     .collect(),
                 legend: |r| format!("radius {}", mm(r.radius.unwrap_or(0.0))),
             });
@@ -476,7 +479,7 @@ pub(super) fn free_tip_sweeps(mini: &Path, min_cell: f64) -> Vec<Sweep> {
             ),
             scene: mini.to_path_buf(),
             end: Some(3.0e-5),
-            runs: RADII.iter().map(|&n| run(h, Some(n * h))).collect(),
+            runs: RADII.iter().map(|&r| run(h, Some(r))).collect(),
             legend: |r| format!("radius {}", mm(r.radius.unwrap_or(0.0))),
         });
     }
