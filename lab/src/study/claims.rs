@@ -316,7 +316,11 @@ impl Report<'_> {
         // Which of these runs ran at the cap: their speeds are the law's limit, not the grid's
         // or the material's answer (issue 34).
         let (mut capped, mut all) = (Vec::new(), 0usize);
-        for sw in self.sweeps.iter().filter(|x| x.scale == scale && x.law == law) {
+        for sw in self
+            .sweeps
+            .iter()
+            .filter(|x| x.scale == scale && x.law == law)
+        {
             for v in &sw.runs {
                 let Some(m) = self.get(sw, v) else { continue };
                 all += 1;
