@@ -144,6 +144,13 @@ fn run_job(job: &Job, config: SolverConfig) -> Outcome {
     }
 }
 
+/// A table row for a run that failed: its labels, the error, and empty cells to `width`.
+fn failed_row(mut labels: Vec<String>, e: &str, width: usize) -> Vec<String> {
+    labels.push(format!("failed: {e}"));
+    labels.resize(width, String::new());
+    labels
+}
+
 /// A message on one line, runs of white space as one space (a table cell).
 fn one_line(s: &str) -> String {
     s.split_whitespace().collect::<Vec<_>>().join(" ")
@@ -439,9 +446,7 @@ impl Page<'_> {
                         num(m.j1_over_g_gstar, 2),
                     ],
                     Some(Outcome::Failed(e)) => {
-                        let mut v = vec![format!("{r}"), label.clone(), format!("failed: {e}")];
-                        v.resize(7, String::new());
-                        v
+                        failed_row(vec![format!("{r}"), label.clone()], e, 7)
                     }
                     _ => continue,
                 };
@@ -533,14 +538,11 @@ impl Page<'_> {
                     let (f, m) = match o {
                         Outcome::Freund(f, m) => (f, m),
                         Outcome::Failed(e) => {
-                            let mut row = vec![
-                                format!("{r}"),
-                                reg.label(),
-                                format!("{}", 1e3 * h),
-                                format!("failed: {e}"),
-                            ];
-                            row.resize(14, String::new());
-                            rows.push(row);
+                            rows.push(failed_row(
+                                vec![format!("{r}"), reg.label(), format!("{}", 1e3 * h)],
+                                e,
+                                14,
+                            ));
                             continue;
                         }
                         Outcome::Strip(..) => continue,
@@ -694,14 +696,11 @@ impl Page<'_> {
                     let (st, m) = match o {
                         Outcome::Strip(st, m) => (st, m),
                         Outcome::Failed(e) => {
-                            let mut row = vec![
-                                format!("{r}"),
-                                reg.label(),
-                                format!("{}", 1e3 * h),
-                                format!("failed: {e}"),
-                            ];
-                            row.resize(12, String::new());
-                            rows.push(row);
+                            rows.push(failed_row(
+                                vec![format!("{r}"), reg.label(), format!("{}", 1e3 * h)],
+                                e,
+                                12,
+                            ));
                             continue;
                         }
                         Outcome::Freund(..) => continue,
