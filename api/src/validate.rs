@@ -392,6 +392,40 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
         }
     }
 
+    // Body-to-body contact: the bodies with `contact` share the second velocity field, so
+    // they take one law, and they need a body without it to meet.
+    let contact_bodies: Vec<(usize, &ContactLaw)> = scene
+        .bodies
+        .iter()
+        .enumerate()
+        .filter_map(|(i, b)| b.contact.as_ref().map(|law| (i, law)))
+        .collect();
+    if let Some(&(first, law)) = contact_bodies.first() {
+        for &(i, other) in &contact_bodies {
+            if let ContactLaw::Coulomb { friction } = other {
+                c.non_negative(&format!("bodies.{i}.contact.friction"), *friction);
+            }
+            if other != law {
+                c.err(
+                    format!("bodies.{i}.contact"),
+                    other,
+                    format!(
+                        "differs from bodies.{first}.contact: the bodies with a contact law share \
+                         one velocity field, so they take one law"
+                    ),
+                );
+            }
+        }
+        if contact_bodies.len() == scene.bodies.len() {
+            c.err(
+                format!("bodies.{first}.contact"),
+                law,
+                "has no body to meet: every body names a contact law, so all share one \
+                 velocity field; leave it off the body they strike",
+            );
+        }
+    }
+
     // Count particles (also detects empty bodies).
     let mut particles = 0u64;
     if regions_ok && grid_ok && c.errors.is_empty() {

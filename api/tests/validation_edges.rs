@@ -121,3 +121,42 @@ fn a_growing_crack_needs_three_cells_across_its_physical_ring() {
     let s = scene_from_value(v).expect("parses");
     assert!((ring(&s) - 0.006).abs() < 1e-12);
 }
+
+/// Body-to-body contact: the bodies with a contact law share one field, so they take one
+/// law, need a body without one to meet, and a negative friction is refused; each error
+/// names the body's field.
+#[test]
+fn body_contact_laws_are_checked_naming_the_body() {
+    let mut v = plate();
+    v["cracks"] = json!([]);
+    let striker = json!({"material": "m",
+        "region": {"rectangle": {"min": [0.05, 0.005], "max": [0.06, 0.045]}},
+        "contact": {"law": "frictionless"}});
+    v["bodies"] = json!([v["bodies"][0].clone(), striker.clone()]);
+    assert_eq!(problems(v.clone()), Vec::<String>::new());
+
+    let mut two = v.clone();
+    let mut other = striker.clone();
+    other["region"] = json!({"rectangle": {"min": [0.07, 0.005], "max": [0.08, 0.045]}});
+    other["contact"] = json!({"law": "coulomb", "friction": -0.2});
+    two["bodies"] = json!([two["bodies"][0].clone(), two["bodies"][1].clone(), other]);
+    let p = problems(two);
+    assert!(
+        p.iter().any(|e| e.starts_with("bodies.2.contact.friction")),
+        "{p:?}"
+    );
+    assert!(
+        p.iter()
+            .any(|e| e.starts_with("bodies.2.contact") && e.contains("one law")),
+        "{p:?}"
+    );
+
+    let mut all = v;
+    all["bodies"][0]["contact"] = json!({"law": "frictionless"});
+    let p = problems(all);
+    assert_eq!(p.len(), 1, "{p:?}");
+    assert!(
+        p[0].starts_with("bodies.0.contact") && p[0].contains("no body to meet"),
+        "{p:?}"
+    );
+}

@@ -44,6 +44,7 @@ fn field_of(
         fracture_api::scene::ShapeFunction::Gimp,
         &kin,
         &mech,
+        &[fracture_solver::particles::Cold::default()],
         &mut fmask,
         &mut f1,
     )

@@ -413,6 +413,9 @@ impl Cracks {
             let Some(info) = self.slots.get(*slot as usize) else {
                 continue;
             };
+            if info.crack == super::fields::BODY_CONTACT {
+                continue;
+            }
             let f_above = self.face_force[*slot as usize];
             let above = usize::from(info.above_is_f1);
             for side in 0..2 {

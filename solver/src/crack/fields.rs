@@ -7,7 +7,7 @@ use fracture_api::scene::ShapeFunction;
 use rayon::prelude::*;
 
 use crate::grid::GridGeom;
-use crate::particles::{Kin, Mech};
+use crate::particles::{Cold, Kin, Mech};
 use crate::shape::Weights2;
 
 use super::Cracks;
@@ -16,6 +16,10 @@ use super::geometry::{left, left_d, norm, sub};
 /// A field-1 pair found by the crossing test: storage index of the node, crack, side of the
 /// particle (+1 above, −1 below), normal of the crossed segment.
 pub(super) type FieldEntry = (u32, u32, i32, [f64; 2]);
+
+/// The `crack` of a field-1 slot that holds a body with a contact law (body-to-body contact,
+/// `Body::contact`) rather than one side of a crack.
+pub const BODY_CONTACT: u32 = u32::MAX;
 
 /// Entries of one chunk of the parallel mask pass and its first error (node, fields needed).
 pub(super) type ChunkEntries = (Vec<FieldEntry>, Option<(usize, u32)>);
@@ -27,7 +31,7 @@ pub struct SlotInfo {
     pub above_is_f1: bool,
     /// Unit normal from above to below.
     pub normal: [f64; 2],
-    /// Crack index.
+    /// Crack index, or [`BODY_CONTACT`] where field 1 holds the contact bodies.
     pub crack: u32,
 }
 
@@ -55,12 +59,32 @@ impl Cracks {
         seg_box: Option<[f64; 4]>,
         kin: &[Kin],
         mech: &[Mech],
+        cold: &[Cold],
         fmask: &mut [u16],
         entries: &mut Vec<FieldEntry>,
     ) -> Result<(), (usize, u32)> {
         let cell = self.h;
         let mut near: Vec<NearSeg> = Vec::new();
-        for (i, (k, m)) in kin.iter().zip(mech).enumerate() {
+        for (i, ((k, m), c)) in kin.iter().zip(mech).zip(cold).enumerate() {
+            if self.contact_bodies.get(c.body as usize) == Some(&true) {
+                // A contact body's particle reaches all its nodes in field 1. The slots'
+                // normals come from the nodal masses (`Cracks::body_normals`).
+                let w = Weights2::new(shape, geom.xi(k.x), m.lh);
+                let mut mask = 0u16;
+                for a in 0..3 {
+                    for b in 0..3 {
+                        if w.x.s[a] * w.y.s[b] == 0.0 {
+                            continue;
+                        }
+                        let ix = (w.x.base + a as i32) as usize;
+                        let iy = (w.y.base + b as i32) as usize;
+                        mask |= 1 << (3 * a + b);
+                        entries.push((geom.index(ix, iy) as u32, BODY_CONTACT, -1, [0.0, 0.0]));
+                    }
+                }
+                fmask[i] = mask;
+                continue;
+            }
             // Most particles lie outside the box of cells holding a segment, where
             // `segs_near` finds none (a NaN ξ is not outside and takes the full look-up).
             let xi = geom.xi(k.x);
@@ -153,12 +177,14 @@ impl Cracks {
     /// Assign the velocity field of every particle–node pair (§3); fills `f1_index` with the
     /// sorted storage indices of nodes needing field 1 and `self.slots` with their records.
     /// Err((node, fields)) when a node would need more than two fields.
+    #[allow(clippy::too_many_arguments)]
     pub fn assign_fields(
         &mut self,
         geom: &GridGeom,
         shape: ShapeFunction,
         kin: &[Kin],
         mech: &[Mech],
+        cold: &[Cold],
         fmask: &mut [u16],
         f1_index: &mut Vec<u32>,
     ) -> Result<(), (usize, u32)> {
@@ -173,11 +199,12 @@ impl Cracks {
             .par_chunks_mut(CHUNK)
             .zip(kin.par_chunks(CHUNK))
             .zip(mech.par_chunks(CHUNK))
+            .zip(cold.par_chunks(CHUNK))
             .zip(chunks.par_iter_mut())
-            .for_each(|(((fm, kn), me), (entries, err))| {
+            .for_each(|((((fm, kn), me), co), (entries, err))| {
                 entries.clear();
                 *err = None;
-                if let Err(e) = this.masks(geom, shape, seg_box, kn, me, fm, entries) {
+                if let Err(e) = this.masks(geom, shape, seg_box, kn, me, co, fm, entries) {
                     *err = Some(e);
                 }
             });

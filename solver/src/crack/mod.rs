@@ -276,6 +276,12 @@ pub struct Cracks {
     pub cracks: Vec<Crack>,
     /// Records of the field-1 nodes, parallel to the simulation's field-1 table.
     pub slots: Vec<SlotInfo>,
+    /// Per body: whether it carries the contact field (`Body::contact`); from the scene.
+    #[serde(skip)]
+    contact_bodies: Vec<bool>,
+    /// The contact bodies' law (`Body::contact`), the same for all of them; from the scene.
+    #[serde(skip)]
+    body_contact: ContactLaw,
     h: f64,
     cfl: f64,
     thickness: f64,
@@ -464,6 +470,12 @@ impl Cracks {
         Cracks {
             cracks,
             slots: Vec::new(),
+            contact_bodies: scene.bodies.iter().map(|b| b.contact.is_some()).collect(),
+            body_contact: scene
+                .bodies
+                .iter()
+                .find_map(|b| b.contact.clone())
+                .unwrap_or_default(),
             h,
             cfl: scene.time.cfl,
             thickness: scene.thickness,
@@ -503,6 +515,8 @@ impl Cracks {
         {
             return Err("crack tables of another grid or material set".into());
         }
+        self.contact_bodies = fresh.contact_bodies.clone();
+        self.body_contact = fresh.body_contact.clone();
         for (c, f) in self.cracks.iter_mut().zip(&fresh.cracks) {
             if c.pts.len() < 2 || c.interface != f.interface {
                 return Err("a crack of another kind or with fewer than 2 points".into());

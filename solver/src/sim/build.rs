@@ -81,6 +81,9 @@ impl Simulation {
         let c_max = mats.iter().map(|m| m.c_l).fold(0.0, f64::max);
         let mass_total: f64 = parts.mech.iter().map(|m| m.m).sum();
         let storage = geom.storage_len();
+        // Two velocity fields per node: cracks, or bodies that meet through a contact law.
+        let multi_field =
+            !scene.cracks.is_empty() || scene.bodies.iter().any(|b| b.contact.is_some());
         let mut sim = Simulation {
             scene: scene.clone(),
             geom,
@@ -123,7 +126,7 @@ impl Simulation {
             scratch_stress: vec![[0.0; 4]; n],
             scratch_wden: vec![0.0; n],
             scratch_cold: vec![Cold::default(); n],
-            scratch_grad: if scene.cracks.is_empty() {
+            scratch_grad: if !multi_field {
                 Vec::new()
             } else {
                 vec![[0.0; 4]; n]
@@ -141,7 +144,7 @@ impl Simulation {
             // bit; the FMA build is chosen with `set_kernel` or `fracture bench --kernel`.
             kernel: crate::kernel::Kernel::Portable,
         };
-        if !scene.cracks.is_empty() {
+        if multi_field {
             sim.slot_of = vec![u32::MAX; storage];
             sim.parts.fmask = vec![0; n];
             sim.parts.grad_u = vec![[0.0; 4]; n];

@@ -40,6 +40,7 @@ impl Simulation {
             self.shape,
             &self.parts.kin,
             &self.parts.mech,
+            &self.parts.cold,
             &mut self.parts.fmask,
             &mut self.f1_index,
         )
