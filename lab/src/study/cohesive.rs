@@ -54,6 +54,11 @@ pub(super) struct Bond {
     pub(super) g: f64,
     pub(super) mu: f64,
     pub(super) h: Option<f64>,
+    /// Plane stress (the experiment's thin plate) instead of the scene's plane strain.
+    pub(super) plane_stress: bool,
+    /// The impact as a steel projectile body with body-to-body contact
+    /// ([`projectile`]) instead of the scene's prescribed edge velocity.
+    pub(super) projectile: bool,
 }
 
 impl Bond {
@@ -64,13 +69,24 @@ impl Bond {
             g: G_C,
             mu: 0.0,
             h: None,
+            plane_stress: false,
+            projectile: false,
         }
     }
     fn key(&self) -> String {
         format!(
-            "{}|{}|{}|{}|{:?}",
-            self.v, self.tau, self.g, self.mu, self.h
+            "{}|{}|{}|{}|{:?}|{}|{}",
+            self.v, self.tau, self.g, self.mu, self.h, self.plane_stress, self.projectile
         )
+    }
+    /// How the run differs from the scene in its state and load ("" for neither).
+    fn state_and_load(&self) -> String {
+        match (self.plane_stress, self.projectile) {
+            (false, false) => String::new(),
+            (true, false) => "plane stress".into(),
+            (false, true) => "projectile".into(),
+            (true, true) => "plane stress, projectile".into(),
+        }
     }
     fn label(&self) -> String {
         let mut s = format!(
@@ -83,6 +99,9 @@ impl Bond {
         if let Some(h) = self.h {
             s.push_str(&format!(", h = {}", mm(h)));
         }
+        if self.plane_stress || self.projectile {
+            s.push_str(&format!(", {}", self.state_and_load()));
+        }
         s
     }
     fn file_tag(&self) -> String {
@@ -94,7 +113,8 @@ impl Bond {
             self.mu,
             self.h
                 .map_or(String::new(), |h| format!("-h{}um", (h * 1e6).round()))
-        )
+        ) + if self.plane_stress { "-ps" } else { "" }
+            + if self.projectile { "-body" } else { "" }
     }
     /// The mode II cohesive zone μG/τ² (m) in a material of shear modulus `shear`.
     fn zone(&self, shear: f64) -> f64 {
@@ -150,6 +170,28 @@ pub(super) fn cohesive_sweeps(scene_h: f64, min_cell: f64) -> Vec<CSweep> {
                 .map(|mu| Bond { mu, ..b })
                 .collect(),
             legend: |r| format!("μ = {}", r.mu),
+            fringes: false,
+        },
+        CSweep {
+            id: "cohesive-experiment",
+            title: "The experiment's state and load: plane strain and plane stress, the impact \
+                    as a prescribed edge velocity and as a steel projectile (25 m/s, τ_c = 30 \
+                    MPa, G_c = 1000 J/m², frictionless)"
+                .into(),
+            runs: [(false, false), (true, false), (false, true), (true, true)]
+                .into_iter()
+                .map(|(plane_stress, projectile)| Bond {
+                    plane_stress,
+                    projectile,
+                    ..b
+                })
+                .collect(),
+            legend: |r| match (r.plane_stress, r.projectile) {
+                (false, false) => "plane strain, edge velocity".into(),
+                (true, false) => "plane stress, edge velocity".into(),
+                (false, true) => "plane strain, projectile".into(),
+                (true, true) => "plane stress, projectile".into(),
+            },
             fringes: false,
         },
         CSweep {
@@ -235,6 +277,12 @@ pub(super) fn cohesive_doc(
             json!(y - 0.5 * h),
         )?;
     }
+    if b.projectile {
+        projectile(&mut doc, b.v)?;
+    }
+    if b.plane_stress {
+        set_path(&mut doc, "analysis", json!("plane_stress"))?;
+    }
     set_path(&mut doc, "time.end", json!(end))?;
     set_path(&mut doc, "output.history_interval", json!(1.0e-7))?;
     if snapshots {
@@ -244,6 +292,52 @@ pub(super) fn cohesive_doc(
         set_path(&mut doc, "output.snapshot_interval", json!(0.0))?;
     }
     Ok(doc)
+}
+
+/// The Rosakis projectile (`reference-solutions.md`): steel, 75 mm long.
+const PROJECTILE_LENGTH: f64 = 0.075;
+
+/// Replace the scene's driven edge (`boundary_conditions.0`) by the projectile itself: a steel
+/// body (E = 190 GPa, ν = 0.3, ρ = 8000 kg/m³) [`PROJECTILE_LENGTH`] long touching the struck
+/// edge at `v`, spanning the driven patch's height up to 2.5 cells below the bond, with
+/// frictionless body-to-body contact (`bodies[].contact`); the grid grows to the left to hold
+/// it. The pulse (its transit) and the struck face's speed (impedance matching) follow.
+fn projectile(doc: &mut Value, v: f64) -> anyhow::Result<()> {
+    let num = |doc: &Value, p: &str| {
+        doc.pointer(p)
+            .and_then(Value::as_f64)
+            .with_context(|| format!("the scene has no {p}"))
+    };
+    let h = num(doc, "/grid/cell_size")?;
+    let x_edge = num(doc, "/bodies/0/region/rectangle/min/0")?;
+    let y_lo = num(doc, "/boundary_conditions/0/region/rectangle/min/1")?;
+    let y_bond = num(doc, "/interfaces/0/points/0/1")?;
+    let x_min = x_edge - PROJECTILE_LENGTH - 2.0 * h;
+    let grid_min = num(doc, "/grid/min/0")?;
+    set_path(doc, "grid.min.0", json!(grid_min.min(x_min)))?;
+    set_path(
+        doc,
+        "materials.rosakis_projectile_steel",
+        json!({"model": "linear_elastic", "density": 8000.0, "youngs_modulus": 190.0e9,
+               "poissons_ratio": 0.3}),
+    )?;
+    let body = json!({"material": "rosakis_projectile_steel",
+        "region": {"rectangle": {"min": [x_edge - PROJECTILE_LENGTH, y_lo],
+                                 "max": [x_edge, y_bond - 2.5 * h]}},
+        "particles_per_cell": 2, "initial_velocity": [v, 0.0],
+        "contact": {"law": "frictionless"}});
+    let bodies = doc
+        .get_mut("bodies")
+        .and_then(Value::as_array_mut)
+        .context("the scene has no bodies")?;
+    bodies.push(body);
+    let bcs = doc
+        .get_mut("boundary_conditions")
+        .and_then(Value::as_array_mut)
+        .context("the scene has no boundary_conditions")?;
+    anyhow::ensure!(!bcs.is_empty(), "the scene has no driven edge to replace");
+    bcs.remove(0);
+    Ok(())
 }
 
 fn cohesive_scene(base: &Value, b: &Bond, end: f64, snapshots: bool) -> anyhow::Result<Scene> {
@@ -348,6 +442,7 @@ pub(super) fn run(setup: &Setup) -> anyhow::Result<PathBuf> {
         .context("the cohesive scene has no material")?;
     let speeds = mat.wave_speeds(scene0.analysis);
     let shear = speeds.c_s * speeds.c_s * mat.density();
+    let nu = mat.poissons_ratio();
     let end = scene0.time.end;
     let sweeps = cohesive_sweeps(scene0.grid.cell_size, a.cohesive_min_cell);
     // Distinct runs.
@@ -382,6 +477,7 @@ pub(super) fn run(setup: &Setup) -> anyhow::Result<PathBuf> {
         results: &results,
         speeds,
         shear,
+        nu,
         thickness: scene0.thickness,
         scene_h: scene0.grid.cell_size,
         wall: started.elapsed().as_secs_f64(),
@@ -397,6 +493,8 @@ struct Page<'a> {
     results: &'a HashMap<String, Measured>,
     speeds: WaveSpeeds,
     shear: f64,
+    /// Poisson's ratio of the scene's material.
+    nu: f64,
     thickness: f64,
     scene_h: f64,
     wall: f64,
@@ -587,10 +685,55 @@ impl Page<'_> {
             ],
             &rows,
         ));
+        if sw.id == "cohesive-experiment" {
+            self.experiment_note(md);
+        }
         if sw.fringes {
             self.fringes(md, sw)?;
         }
         Ok(())
+    }
+
+    /// What the state-and-load runs change: the plane-stress wave speeds (the speeds in the
+    /// tables are the scene's plane-strain ones; c_S is the same in both states) and the
+    /// projectile's pulse and impedance match.
+    fn experiment_note(&self, md: &mut String) {
+        let s = &self.speeds;
+        let ps = WaveSpeeds::new(
+            self.shear * 2.0 * (1.0 + self.nu),
+            self.nu,
+            self.shear / (s.c_s * s.c_s),
+            fracture_api::scene::Analysis::PlaneStress,
+        );
+        let z_h = |c_l: f64| self.shear / (s.c_s * s.c_s) * c_l;
+        let (rho_s, e_s, nu_s) = (8000.0f64, 190.0e9f64, 0.3f64);
+        let c_bar = (e_s / (rho_s * (1.0 - nu_s * nu_s))).sqrt();
+        let c_steel = (e_s * (1.0 - nu_s) / ((1.0 + nu_s) * (1.0 - 2.0 * nu_s)) / rho_s).sqrt();
+        let z_s = rho_s * c_steel;
+        let _ = writeln!(
+            md,
+            "\nPlane stress (the experiment's 9.5 mm plate) has the same c_S but c_L {:.0} and \
+             c_R {:.0} m/s (plane strain: {:.0} and {:.0}); the speeds in the table are given \
+             against the plane-strain c_S = {:.0} m/s, which both share. The projectile runs \
+             replace the prescribed edge velocity ({:.2} × v for the pulse of 30 µs) by a steel \
+             body {:.0} mm long touching the struck edge at v, with frictionless body-to-body \
+             contact (`bodies[].contact`, `docs/scene-extensions.md`): its transit 2L/c_bar = \
+             {:.1} µs (c_bar = {:.0} m/s for the 2D bar) sets the pulse, and impedance \
+             matching the struck face's speed, Z_s/(Z_s + Z_h) = {:.3} × v in plane strain, \
+             {:.3} × v in plane stress — neither is typed in. The projectile spans the driven \
+             patch's height up to 2.5 cells below the bond.\n",
+            ps.c_l,
+            ps.c_r,
+            s.c_l,
+            s.c_r,
+            s.c_s,
+            EDGE_FACTOR,
+            PROJECTILE_LENGTH * 1e3,
+            2.0 * PROJECTILE_LENGTH / c_bar * 1e6,
+            c_bar,
+            z_s / (z_s + z_h(s.c_l)),
+            z_s / (z_s + z_h(ps.c_l)),
+        );
     }
 
     /// Fringe pictures of the runs of `sw` at [`FRINGE_TIMES`], with the Mach angle
@@ -841,10 +984,26 @@ mod tests {
                 let cells = y / h;
                 assert!((cells - cells.floor() - 0.5).abs() < 1e-6, "{}", b.label());
                 assert_eq!(doc["cracks"][0]["points"][1][1].as_f64(), Some(y));
-                let top = doc["boundary_conditions"][0]["region"]["rectangle"]["max"][1]
-                    .as_f64()
-                    .unwrap_or(f64::NAN);
+                let top = if b.projectile {
+                    // The projectile replaces the driven edge, 2.5 cells below the bond.
+                    assert_eq!(doc["boundary_conditions"].as_array().map(Vec::len), Some(0));
+                    let body = &doc["bodies"][1];
+                    assert_eq!(body["contact"]["law"].as_str(), Some("frictionless"));
+                    assert_eq!(body["initial_velocity"][0].as_f64(), Some(b.v));
+                    body["region"]["rectangle"]["max"][1].as_f64()
+                } else {
+                    doc["boundary_conditions"][0]["region"]["rectangle"]["max"][1].as_f64()
+                }
+                .unwrap_or(f64::NAN);
                 assert!(top < y, "the driven edge reaches the bond: {top} vs {y}");
+                assert_eq!(
+                    doc["analysis"].as_str(),
+                    Some(if b.plane_stress {
+                        "plane_stress"
+                    } else {
+                        "plane_strain"
+                    })
+                );
                 let c = &doc["interfaces"][0]["cohesive"];
                 assert_eq!(c["shear"]["toughness"].as_f64(), Some(b.g));
                 assert_eq!(c["normal"]["strength"].as_f64(), Some(b.tau));
