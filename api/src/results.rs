@@ -12,7 +12,7 @@ pub const ENERGY_CSV_HEADER: &str =
 /// Column header of `crack_tips.csv`.
 /// Column header of `crack_tips.csv`: `run-output.md`'s columns, then (an extension, at the
 /// end) the path-independence report and the crack-opening K.
-pub const CRACK_TIPS_CSV_HEADER: &str = "time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing,j1_half,j2_half,j1_double,j2_double,k1_cod,k2_cod,zone_x,zone_y";
+pub const CRACK_TIPS_CSV_HEADER: &str = "time,crack,tip,x,y,length,speed,j1,j2,k1,k2,growing,j1_half,j2_half,j1_double,j2_double,k1_cod,k2_cod,zone_x,zone_y,connected_x,connected_y,zone_connected_x,zone_connected_y";
 
 /// One energy sample (J per the scene's thickness). Every number may be NaN (written as
 /// JSON `null`, read back as NaN: [`crate::nan`]).
@@ -222,6 +222,43 @@ pub struct CrackTipRow {
     #[schemars(with = "Option<f64>")]
     #[schema(value_type = Option<f64>)]
     pub zone_y: f64,
+    /// A cohesive interface's failure front connected to its start (m): the last point of the
+    /// unbroken run of failed bond points from the interface's first point (`x`, `y` is the
+    /// farthest failed point, connected or not: a daughter crack ahead puts them apart).
+    /// NaN (null) for crack tips and before the first point has failed.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub connected_x: f64,
+    /// The connected failure front's y (m), as `connected_x`.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub connected_y: f64,
+    /// The end of the softened region connected to the interface's start (m): the last point
+    /// of the unbroken run of softening or failed points from its first point (`zone_x` is the
+    /// farthest, connected or not). NaN (null) for crack tips and before any point softens.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub zone_connected_x: f64,
+    /// The connected softened region's end y (m), as `zone_connected_x`.
+    #[serde(
+        default = "crate::nan::nan",
+        deserialize_with = "crate::nan::f64_or_nan"
+    )]
+    #[schemars(with = "Option<f64>")]
+    #[schema(value_type = Option<f64>)]
+    pub zone_connected_y: f64,
 }
 
 impl CrackTipRow {
@@ -257,7 +294,11 @@ impl CrackTipRow {
                 self.k1_cod,
                 self.k2_cod,
                 self.zone_x,
-                self.zone_y
+                self.zone_y,
+                self.connected_x,
+                self.connected_y,
+                self.zone_connected_x,
+                self.zone_connected_y
             ])
         )
     }

@@ -784,6 +784,8 @@ async fn hand_back_and_rewind_history(store: Store) {
             tip: 1,
             zone_x: 0.021,
             zone_y: f64::NAN,
+            connected_x: 0.019,
+            zone_connected_y: f64::NAN,
             ..CrackTipRow::default()
         })
         .collect();
@@ -792,6 +794,8 @@ async fn hand_back_and_rewind_history(store: Store) {
     assert_eq!(back.len(), 2);
     assert_eq!(back[0].zone_x, 0.021);
     assert!(back[0].zone_y.is_nan());
+    assert_eq!(back[0].connected_x, 0.019);
+    assert!(back[0].zone_connected_y.is_nan());
 
     let j = store
         .hand_back(&h, f1, "handed back (SIGUSR1)")

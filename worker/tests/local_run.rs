@@ -75,6 +75,10 @@ fn local_output_writes_the_run_output_files() {
         k2_cod: 3.0e4,
         zone_x: 0.021,
         zone_y: 0.0275,
+        connected_x: 0.019,
+        connected_y: 0.0275,
+        zone_connected_x: 0.0205,
+        zone_connected_y: 0.0275,
     };
     sink.energy(&[e, e]).unwrap();
     sink.crack_tips(&[t]).unwrap();
@@ -139,10 +143,11 @@ fn local_output_writes_the_run_output_files() {
     assert_eq!(tips[0], CRACK_TIPS_CSV_HEADER);
     assert_eq!(tips.len(), 2);
     let cols: Vec<&str> = tips[1].split(',').collect();
-    assert_eq!(cols.len(), 20);
+    assert_eq!(cols.len(), 24);
     assert_eq!((cols[1], cols[2], cols[11]), ("1", "0", "1"));
     assert_eq!(cols[6].parse::<f64>().unwrap(), 500.0);
     assert_eq!(cols[18].parse::<f64>().unwrap(), 0.021);
+    assert_eq!(cols[20].parse::<f64>().unwrap(), 0.019);
 
     let text = std::fs::read_to_string(out.join("summary.json")).unwrap();
     let v: serde_json::Value = serde_json::from_str(&text).unwrap();

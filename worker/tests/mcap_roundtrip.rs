@@ -82,6 +82,10 @@ fn tip(i: usize, t: u32) -> CrackTipRow {
         k2_cod: -3.0e4,
         zone_x: 0.021,
         zone_y: 0.0275,
+        connected_x: 0.019,
+        connected_y: 0.0275,
+        zone_connected_x: 0.0205,
+        zone_connected_y: 0.0275,
     }
 }
 

@@ -67,6 +67,10 @@ CRACK_TIPS_UNITS: Dict[str, str] = {
     "k2_cod": "Pa·√m",
     "zone_x": "m",
     "zone_y": "m",
+    "connected_x": "m",
+    "connected_y": "m",
+    "zone_connected_x": "m",
+    "zone_connected_y": "m",
 }
 
 #: Unit of every ``energy.csv`` column: energies in J for the scene's thickness.
@@ -333,6 +337,10 @@ class Run:
         ``k2_cod``
         ``zone_x``,       m       a cohesive interface's process-zone front (NaN for
         ``zone_y``                crack tips)
+        ``connected_x``,  m       its failure front and softened region's end connected
+        ``connected_y``,          to its first point (``zone_connected_x``,
+        ``zone_…``                ``zone_connected_y``); apart from ``x`` / ``zone_x``
+                                  when a point ahead failed or softened first
         ================  ======  =====================================================
 
         NaN where a number is not defined (a J ring that leaves the material, K of a tip at

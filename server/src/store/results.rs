@@ -80,7 +80,8 @@ impl Store {
             on_tx!(&mut tx, c, DB => {
             let mut q: QueryBuilder<DB> = QueryBuilder::new(
                 "INSERT INTO crack_tips (job_id, time, crack, tip, x, y, length, speed, j1, j2, k1, k2, growing, \
-                 j1_half, j2_half, j1_double, j2_double, k1_cod, k2_cod, zone_x, zone_y) ",
+                 j1_half, j2_half, j1_double, j2_double, k1_cod, k2_cod, zone_x, zone_y, connected_x, \
+                 connected_y, zone_connected_x, zone_connected_y) ",
             );
             q.push_values(chunk, |mut b, r| {
                 b.push_bind(id)
@@ -103,7 +104,11 @@ impl Store {
                     .push_bind(r.k1_cod)
                     .push_bind(r.k2_cod)
                     .push_bind(r.zone_x)
-                    .push_bind(r.zone_y);
+                    .push_bind(r.zone_y)
+                    .push_bind(r.connected_x)
+                    .push_bind(r.connected_y)
+                    .push_bind(r.zone_connected_x)
+                    .push_bind(r.zone_connected_y);
             });
             q.build().execute(c).await?;
             });
@@ -175,7 +180,8 @@ impl Store {
     ) -> Result<Vec<CrackTipRow>, StoreError> {
         on_db!(&self.db, c => sqlx::query(
             "SELECT time, crack, tip, x, y, length, speed, j1, j2, k1, k2, growing,
-                    j1_half, j2_half, j1_double, j2_double, k1_cod, k2_cod, zone_x, zone_y
+                    j1_half, j2_half, j1_double, j2_double, k1_cod, k2_cod, zone_x, zone_y,
+                    connected_x, connected_y, zone_connected_x, zone_connected_y
              FROM crack_tips
              WHERE job_id = $1 AND ($2 IS NULL OR time > $2) ORDER BY rowid",
         )
@@ -206,6 +212,10 @@ impl Store {
                 k2_cod: real(r, "k2_cod")?,
                 zone_x: real(r, "zone_x")?,
                 zone_y: real(r, "zone_y")?,
+                connected_x: real(r, "connected_x")?,
+                connected_y: real(r, "connected_y")?,
+                zone_connected_x: real(r, "zone_connected_x")?,
+                zone_connected_y: real(r, "zone_connected_y")?,
             })
         })
         .collect())

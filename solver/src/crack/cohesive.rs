@@ -162,6 +162,8 @@ impl Cracks {
         for c in self.cracks.iter_mut().filter(|c| c.interface) {
             let mut f = Fronts::default();
             let mut arc = 0.0;
+            // Whether every bonded point so far has failed / softened (the connected runs).
+            let (mut all_failed, mut all_soft) = (true, true);
             for k in 0..c.pts.len() {
                 if k > 0 {
                     arc += dist(c.pts[k - 1].x0, c.pts[k].x0);
@@ -171,8 +173,16 @@ impl Cracks {
                     f.failure = Some((arc, k));
                     f.failed_length += b.share;
                 }
+                all_failed &= b.failed;
+                if all_failed {
+                    f.connected_failure = Some((arc, k));
+                }
                 if b.softening() {
                     f.zone = Some((arc, k));
+                }
+                all_soft &= b.softening();
+                if all_soft {
+                    f.connected_zone = Some((arc, k));
                 }
             }
             let front = f.failure.map_or(0.0, |(a, _)| a);
@@ -192,7 +202,10 @@ impl Cracks {
             let k = c.fronts.failure.map_or(0, |(_, k)| k);
             let x = c.pts[k].x;
             let nan = f64::NAN;
-            let zone = c.fronts.zone.map_or([nan, nan], |(_, k)| c.pts[k].x);
+            let at = |f: Option<(f64, usize)>| f.map_or([nan, nan], |(_, k)| c.pts[k].x);
+            let zone = at(c.fronts.zone);
+            let connected = at(c.fronts.connected_failure);
+            let zone_connected = at(c.fronts.connected_zone);
             rows.push(CrackTipRow {
                 time,
                 crack: ci as u32,
@@ -214,6 +227,10 @@ impl Cracks {
                 k2_cod: nan,
                 zone_x: zone[0],
                 zone_y: zone[1],
+                connected_x: connected[0],
+                connected_y: connected[1],
+                zone_connected_x: zone_connected[0],
+                zone_connected_y: zone_connected[1],
             });
         }
         rows
@@ -223,6 +240,61 @@ impl Cracks {
 #[cfg(test)]
 mod tests {
     use super::Bond;
+
+    /// The connected fronts stop at the first point that has not failed (softened), while
+    /// the farthest fronts jump ahead to a point that failed (softened) on its own: a daughter
+    /// crack and the stragglers between (issue 35). States along the interface: failed ×3,
+    /// softening, failed (the daughter), softening, rigid.
+    #[test]
+    fn connected_fronts_stop_at_the_first_straggler() {
+        let (_, mut cracks) = super::super::test_cracks(
+            1.0e-3,
+            [0.03, 0.02],
+            [[0.002, 0.002], [0.028, 0.018]],
+            "interfaces",
+            serde_json::json!([{"points": [[0.004, 0.0105], [0.026, 0.0105]],
+                                "cohesive": {"law": "linear",
+                                             "normal": {"strength": 1.0e6, "toughness": 10.0},
+                                             "shear": {"strength": 1.0e6, "toughness": 10.0}}}]),
+        );
+        let c = cracks
+            .cracks
+            .iter_mut()
+            .find(|c| c.interface)
+            .expect("the interface");
+        assert!(c.pts.len() > 8, "{} points", c.pts.len());
+        // Failed, softening (past the peak, traction down by half) and rigid bonds.
+        let states = ['F', 'F', 'F', 'S', 'F', 'S', 'R'];
+        for (k, p) in c.pts.iter_mut().enumerate() {
+            let Some(b) = p.bond.as_mut() else { continue };
+            match states.get(k).copied().unwrap_or('R') {
+                'F' => b.failed = true,
+                'S' => b.lambda_max = 0.5 * (b.law.peak() + b.law.end()),
+                _ => {}
+            }
+            let want = states.get(k).copied().unwrap_or('R');
+            assert_eq!(b.softening(), want != 'R', "point {k} ({want})");
+        }
+        cracks.interface_fronts();
+        let c = cracks
+            .cracks
+            .iter()
+            .find(|c| c.interface)
+            .expect("the interface");
+        let f = &c.fronts;
+        assert_eq!(f.failure.map(|x| x.1), Some(4), "farthest failed");
+        assert_eq!(
+            f.connected_failure.map(|x| x.1),
+            Some(2),
+            "connected failed"
+        );
+        assert_eq!(f.zone.map(|x| x.1), Some(5), "farthest softened");
+        assert_eq!(f.connected_zone.map(|x| x.1), Some(5), "connected softened");
+        let rows = cracks.interface_rows(0.0);
+        let r = &rows[0];
+        assert_eq!([r.x, r.connected_x], [c.pts[4].x[0], c.pts[2].x[0]]);
+        assert_eq!(r.zone_connected_x, c.pts[5].x[0]);
+    }
     use fracture_api::scene::{Cohesive, CohesiveLaw, CohesiveMode};
 
     /// A bond of `law`, engaged (the rigid linear law's loading to the strength is the

@@ -563,6 +563,10 @@ impl Cracks {
                     k2_cod,
                     zone_x: f64::NAN,
                     zone_y: f64::NAN,
+                    connected_x: f64::NAN,
+                    connected_y: f64::NAN,
+                    zone_connected_x: f64::NAN,
+                    zone_connected_y: f64::NAN,
                 });
             }
         }

@@ -166,6 +166,10 @@ pub struct Fronts {
     pub failure: Option<(f64, usize)>,
     /// Farthest point past its peak traction (the process zone's front).
     pub zone: Option<(f64, usize)>,
+    /// Last point of the unbroken run of failed points from the interface's first point.
+    pub connected_failure: Option<(f64, usize)>,
+    /// Last point of the unbroken run of softening (or failed) points from the first point.
+    pub connected_zone: Option<(f64, usize)>,
     /// Failed length (m): Σ of the failed points' shares.
     pub failed_length: f64,
 }

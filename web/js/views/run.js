@@ -125,6 +125,11 @@ export function runView(main, { id }) {
       if (r.zone_x !== null && r.zone_x !== undefined && r.zone_x !== '' && Number.isFinite(Number(r.zone_x))) {
         posPlot.push(`${key}z`, t, Number(r.zone_x), { name: `process-zone front x, ${n}`, color, dash: DASHES[3] });
       }
+      // The failure front connected to the interface's start (`connected_x`): apart from `x`
+      // when a point ahead failed first (a daughter crack).
+      if (r.connected_x !== null && r.connected_x !== undefined && r.connected_x !== '' && Number.isFinite(Number(r.connected_x))) {
+        posPlot.push(`${key}c`, t, Number(r.connected_x), { name: `connected failure front x, ${n}`, color, dash: DASHES[2] });
+      }
       jPlot.push(`${key}1`, t, r.j1, { name: `J1, ${n}`, color });
       jPlot.push(`${key}2`, t, r.j2, { name: `J2, ${n}`, color, dash: DASHES[1] });
       kPlot.push(`${key}1`, t, r.k1, { name: `K_I, ${n}`, color });
