@@ -366,6 +366,12 @@ pub(super) struct Front {
     pub(super) failed: f64,
     /// Traction work per failed area (J/m²).
     pub(super) energy_per_area: Option<f64>,
+    /// Largest distance (m) by which the farthest failed point led the connected failure
+    /// front, and when (s): a daughter crack or stragglers (`crack_tips.csv` `connected_x`).
+    pub(super) failed_apart: (f64, f64),
+    /// The same for the softened region: the farthest softened point ahead of the end of the
+    /// softened region connected to the notch (`zone_connected_x`), and when.
+    pub(super) softened_apart: (f64, f64),
 }
 
 /// The front measures of a run (`m` collected on the interface's row) in a material of wave
@@ -395,6 +401,14 @@ pub(super) fn front(m: &Measured, s: &WaveSpeeds, thickness: f64, min_failed: f6
     // The work includes the points still softening in the zone ahead of the front: per failed
     // area it means the toughness only once the failed length is long against the zone.
     let energy_per_area = (failed > min_failed).then(|| m.fracture_work / (failed * thickness));
+    let mut apart = [(0.0, 0.0); 2];
+    for (a, &t) in m.apart.iter().zip(&m.t) {
+        for k in 0..2 {
+            if a[k] > apart[k].0 {
+                apart[k] = (a[k], t);
+            }
+        }
+    }
     Front {
         initiation,
         early,
@@ -404,6 +418,17 @@ pub(super) fn front(m: &Measured, s: &WaveSpeeds, thickness: f64, min_failed: f6
         jump,
         failed,
         energy_per_area,
+        failed_apart: apart[0],
+        softened_apart: apart[1],
+    }
+}
+
+/// "2.50 mm at 21.3 µs", or "0" when never apart.
+fn apart_cell(a: (f64, f64)) -> String {
+    if a.0 > 0.0 {
+        format!("{:.2} mm at {:.1} µs", a.0 * 1e3, a.1 * 1e6)
+    } else {
+        "0".into()
     }
 }
 
@@ -560,7 +585,12 @@ impl Page<'_> {
              = the mean front speed over {:.0}–{:.0} µs after impact (after the base case's \
              transition, before the end of the 30 µs pulse reaches the front); jump = the \
              largest move of the front in one 0.1 µs sample (a move of {} or more bond points \
-             means a point ahead failed before those between: a daughter crack); energy = the \
+             means a point ahead failed before those between: a daughter crack); failed apart \
+             = the largest distance by which the farthest failed point led the failure front \
+             connected to the notch (`crack_tips.csv` `connected_x`: a daughter crack, or \
+             stragglers left unfailed behind it), softened apart = the same for the softened \
+             region (`zone_x` against `zone_connected_x`: bond softened ahead, apart from the \
+             zone that grows from the notch); energy = the \
              traction work (`energy.csv` `fracture`) per failed area. Wave speeds: c_R {:.0}, \
              c_S {:.0}, √2·c_S {:.0}, c_L {:.0} m/s.\n",
             BOX * 1e6,
@@ -590,6 +620,8 @@ impl Page<'_> {
             "late_m_s",
             "largest_jump_mm",
             "jump_at_us",
+            "failed_apart_mm",
+            "softened_apart_mm",
             "failed_length_mm",
             "energy_per_failed_area_j_m2",
             "wall_s",
@@ -628,6 +660,8 @@ impl Page<'_> {
                 us(f.transition),
                 speed_cs(f.late, s),
                 format!("{:.2} mm at {:.1} µs", f.jump.0 * 1e3, f.jump.1 * 1e6),
+                apart_cell(f.failed_apart),
+                apart_cell(f.softened_apart),
                 f.energy_per_area
                     .map_or(format!("– ({:.1} mm failed)", f.failed * 1e3), |e| {
                         format!("{e:.0} ({:.2} G_c)", e / b.g)
@@ -651,6 +685,8 @@ impl Page<'_> {
                 f.late.map_or(String::new(), |v| format!("{v:.1}")),
                 format!("{:.4}", f.jump.0 * 1e3),
                 format!("{:.3}", f.jump.1 * 1e6),
+                format!("{:.3}", f.failed_apart.0 * 1e3),
+                format!("{:.3}", f.softened_apart.0 * 1e3),
                 format!("{:.3}", f.failed * 1e3),
                 f.energy_per_area
                     .map_or(String::new(), |e| format!("{e:.1}")),
@@ -680,6 +716,8 @@ impl Page<'_> {
                 "transition (> c_S)",
                 "late speed (25–45 µs)",
                 "largest front jump",
+                "failed apart (max)",
+                "softened apart (max)",
                 "energy per failed area",
                 "wall",
             ],

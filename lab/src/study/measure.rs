@@ -48,6 +48,11 @@ pub(super) struct Measured {
     pub(super) off_material: f64,
     /// The last energy row's `fracture` (J): tips' zones and cohesive traction work.
     pub(super) fracture_work: f64,
+    /// Per sample of a cohesive interface's row: how far (m, along x) its farthest failed
+    /// point lies ahead of its connected failure front, and its farthest softened point ahead
+    /// of the end of its connected softened region (`crack_tips.csv` `connected_x`,
+    /// `zone_connected_x`); NaN where not defined (crack tips).
+    pub(super) apart: Vec<[f64; 2]>,
 }
 
 impl Measured {
@@ -254,6 +259,9 @@ impl RunSink for Collect {
             self.m.j1.push(r.j1);
             self.m.j1_half.push(r.j1_half);
             self.m.j1_double.push(r.j1_double);
+            self.m
+                .apart
+                .push([r.x - r.connected_x, r.zone_x - r.zone_connected_x]);
         }
         Ok(())
     }
@@ -312,6 +320,7 @@ pub(super) fn run_one(
             fringes: Vec::new(),
             off_material: 0.0,
             fracture_work: 0.0,
+            apart: Vec::new(),
         },
     };
     let opts = RunOptions {
@@ -369,6 +378,7 @@ mod tests {
             fringes: Vec::new(),
             off_material: 0.0,
             fracture_work: 0.0,
+            apart: Vec::new(),
         }
     }
 

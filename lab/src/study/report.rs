@@ -545,6 +545,7 @@ mod tests {
             fringes: Vec::new(),
             off_material: 1e-4,
             fracture_work: 0.0,
+            apart: Vec::new(),
         }
     }
 
