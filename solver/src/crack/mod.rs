@@ -42,7 +42,7 @@ mod zone;
 
 pub use cohesive::Bond;
 pub use contact::Stage;
-pub use fields::SlotInfo;
+pub use fields::{BODY_CONTACT, SlotInfo};
 pub use geometry::crosses;
 pub use zone::Zone;
 
