@@ -378,8 +378,8 @@ pub struct Body {
     pub initial_velocity: Vec2,
     /// (extension, `docs/scene-extensions.md`) Body-to-body contact: the body carries its own
     /// velocity field at the nodes it shares with the other bodies, and meets them through
-    /// this law (frictionless, stick or Coulomb; `algorithm.md` §4's algebra with the normal
-    /// from the body's mass gradient). Absent: the body shares one field with every other
+    /// this law (frictionless, stick or Coulomb; `algorithm.md` §4's algebra with the struck
+    /// body's surface normal). Absent: the body shares one field with every other
     /// body it touches (bonded, as before). Bodies with `contact` share that second field
     /// with each other.
     #[serde(default, skip_serializing_if = "Option::is_none")]

@@ -79,15 +79,6 @@ impl Bond {
             self.v, self.tau, self.g, self.mu, self.h, self.plane_stress, self.projectile
         )
     }
-    /// How the run differs from the scene in its state and load ("" for neither).
-    fn state_and_load(&self) -> String {
-        match (self.plane_stress, self.projectile) {
-            (false, false) => String::new(),
-            (true, false) => "plane stress".into(),
-            (false, true) => "projectile".into(),
-            (true, true) => "plane stress, projectile".into(),
-        }
-    }
     fn label(&self) -> String {
         let mut s = format!(
             "v = {} m/s, τ_c = {} MPa, G_c = {} J/m², μ = {}",
@@ -99,8 +90,11 @@ impl Bond {
         if let Some(h) = self.h {
             s.push_str(&format!(", h = {}", mm(h)));
         }
-        if self.plane_stress || self.projectile {
-            s.push_str(&format!(", {}", self.state_and_load()));
+        if self.plane_stress {
+            s.push_str(", plane stress");
+        }
+        if self.projectile {
+            s.push_str(", projectile");
         }
         s
     }
@@ -186,11 +180,20 @@ pub(super) fn cohesive_sweeps(scene_h: f64, min_cell: f64) -> Vec<CSweep> {
                     ..b
                 })
                 .collect(),
-            legend: |r| match (r.plane_stress, r.projectile) {
-                (false, false) => "plane strain, edge velocity".into(),
-                (true, false) => "plane stress, edge velocity".into(),
-                (false, true) => "plane strain, projectile".into(),
-                (true, true) => "plane stress, projectile".into(),
+            legend: |r| {
+                format!(
+                    "{}, {}",
+                    if r.plane_stress {
+                        "plane stress"
+                    } else {
+                        "plane strain"
+                    },
+                    if r.projectile {
+                        "projectile"
+                    } else {
+                        "edge velocity"
+                    }
+                )
             },
             fringes: false,
         },

@@ -3,7 +3,7 @@
 //! stick law, applied as ±Δp at the chosen momentum stage so momentum is conserved exactly;
 //! returns the frictional work for the energy balance. The same algebra joins a body with a
 //! contact law to the others (`Body::contact`, slots marked [`BODY_CONTACT`]), with the
-//! normal from both fields' mass gradients ([`Cracks::body_normals`]).
+//! struck body's surface normal from the nodal masses ([`Cracks::body_normals`]).
 
 use fracture_api::scene::ContactLaw;
 
@@ -40,7 +40,7 @@ impl Cracks {
             self.face_force.clear();
             self.face_force.resize(self.slots.len(), [0.0; 2]);
         }
-        if stage == Stage::Extrapolated {
+        if stage == Stage::Extrapolated && self.contact_bodies.contains(&true) {
             self.body_normals(nodes, f1, f1_index);
         }
         for (s, info) in self.slots.iter().enumerate() {

@@ -65,8 +65,10 @@ impl Cracks {
     ) -> Result<(), (usize, u32)> {
         let cell = self.h;
         let mut near: Vec<NearSeg> = Vec::new();
+        // Scenes without contact bodies never read the particles' body index.
+        let any_contact = self.contact_bodies.contains(&true);
         for (i, ((k, m), c)) in kin.iter().zip(mech).zip(cold).enumerate() {
-            if self.contact_bodies.get(c.body as usize) == Some(&true) {
+            if any_contact && self.contact_bodies.get(c.body as usize) == Some(&true) {
                 // A contact body's particle reaches all its nodes in field 1. The slots'
                 // normals come from the nodal masses (`Cracks::body_normals`).
                 let w = Weights2::new(shape, geom.xi(k.x), m.lh);
