@@ -1,0 +1,34 @@
+//! `fracture-mpm`: the continuum core of mpm-fracture, written once for two and three
+//! dimensions (`three-d.md`, shape of the code).
+//!
+//! [`Dim`] (implemented by [`Dim2`] and [`Dim3`]) carries the dimension's arrays and the
+//! little arithmetic that depends on it; the grid ([`grid`]), GIMP and linear shape
+//! functions ([`shape`]), particles ([`particles`]), the four particle passes ([`passes`])
+//! on a [`Backend`] (today [`Cpu`]), the step sequence with boundary conditions, damping and
+//! the energy ledger ([`step`]), and checkpoints ([`checkpoint`]) are generic over it.
+//! A [`Simulation`] is `{ state, model, scratch }`: the checkpoint is the [`State`].
+//!
+//! The passes keep the 2D solver's arithmetic (`madd`, the order of every sum, f32-cached
+//! weights): `tests/twin.rs` checks a `Dim2` run against the 2D solver bit for bit.
+//! The core does no IO and never logs. Results are bitwise identical for any thread count.
+
+#![allow(clippy::needless_range_loop)]
+
+pub mod backend;
+pub mod checkpoint;
+pub mod dim;
+pub mod grid;
+pub mod math;
+pub mod particles;
+pub mod passes;
+pub mod scenes;
+pub mod shape;
+pub mod state;
+pub mod step;
+
+pub use backend::{Backend, Cpu};
+pub use checkpoint::CheckpointError;
+pub use dim::{Dim, Dim2, Dim3, Elastic};
+pub use math::Kernel;
+pub use state::{BcSpec, Ledger, LoadSpec, PassTimes, Region, Spec, State};
+pub use step::{BuildError, Simulation, StepError, StepStats};

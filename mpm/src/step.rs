@@ -1,0 +1,772 @@
+//! The simulation and its one step sequence (`algorithm.md` §2, USAVG):
+//! 1. P2G (mass, momentum), velocity conditions on the momenta, nodal velocities;
+//! 2. velocity gradient, first stress half-update, forces; damping, condition force fix,
+//!    nodal accelerations;
+//! 3. particle update and re-extrapolation; conditions on the new momenta, nodal velocities;
+//! 4. velocity gradient from the re-extrapolated momenta, second stress half-update.
+//!
+//! The particle passes run on a [`Backend`]; the grid work between them (zeroing the active
+//! box, nodal values, conditions, damping) is here, on the host grid.
+
+use std::time::Instant;
+
+use fracture_api::scene::Damping;
+use rayon::prelude::*;
+
+use crate::backend::{Backend, Cpu};
+use crate::dim::Dim;
+use crate::grid::{GridGeom, Node, PAD, STRIP};
+use crate::math::Kernel;
+use crate::particles::Particles;
+use crate::passes::{Acc, FAIL_GRID, FAIL_POSITION, FAIL_VELOCITY};
+use crate::state::{BcNodes, Ledger, Model, PassTimes, Region, Scratch, Spec, State};
+
+/// Why a simulation could not be built.
+#[derive(Debug, thiserror::Error)]
+pub enum BuildError {
+    /// The thread pool could not be created.
+    #[error("thread pool: {0}")]
+    Threads(String),
+    /// The specification is inconsistent.
+    #[error("{0}")]
+    Spec(String),
+}
+
+fn fmt_pos(p: &[f64; 3], n: usize) -> String {
+    let parts: Vec<String> = p[..n].iter().map(|v| format!("{v:.6e}")).collect();
+    format!("({})", parts.join(", "))
+}
+
+/// Why a step failed, with its diagnosis.
+#[derive(Debug, Clone, PartialEq, thiserror::Error)]
+pub enum StepError {
+    /// A particle quantity became NaN or infinite.
+    #[error("step {step}: {quantity} of particle {particle} at {} m is not finite", fmt_pos(.position, *.dims))]
+    NonFinite {
+        /// Step number.
+        step: u64,
+        /// Original particle index.
+        particle: usize,
+        /// Which quantity.
+        quantity: &'static str,
+        /// Particle position (start of the step; unused components 0).
+        position: [f64; 3],
+        /// Number of spatial dimensions.
+        dims: usize,
+    },
+    /// Total energy grew far beyond the energy put in.
+    #[error(
+        "step {step}: energy blow-up: kinetic + strain = {energy:.6e} J against {reference:.6e} J put in (initial energy + external work); reduce time.cfl or check the loads"
+    )]
+    EnergyBlowUp {
+        /// Step number.
+        step: u64,
+        /// Kinetic + strain energy.
+        energy: f64,
+        /// Initial energy plus external work.
+        reference: f64,
+    },
+    /// A particle reached the grid edge.
+    #[error("step {step}: particle {particle} reached the grid edge at {} m; enlarge grid.min/grid.max", fmt_pos(.position, *.dims))]
+    LeftGrid {
+        /// Step number.
+        step: u64,
+        /// Original particle index.
+        particle: usize,
+        /// Position.
+        position: [f64; 3],
+        /// Number of spatial dimensions.
+        dims: usize,
+    },
+}
+
+/// What happened in one step.
+#[derive(Debug, Clone, Copy, Default, PartialEq)]
+pub struct StepStats {
+    /// Active grid nodes in this step.
+    pub active_nodes: usize,
+}
+
+/// A running simulation of dimension `D`.
+pub struct Simulation<D: Dim> {
+    /// What persists (the checkpoint).
+    pub state: State<D>,
+    /// What the scene gives.
+    pub model: Model<D>,
+    /// The step's working memory.
+    pub scratch: Scratch<D>,
+    backend: Box<dyn Backend<D>>,
+}
+
+/// The nodes of `region` translated by `shift`.
+fn nodes_in<D: Dim>(region: &Region<D>, shift: &D::V, geom: &GridGeom<D>) -> Vec<u32> {
+    let mut lo = [0usize; 3];
+    let mut hi = [0usize; 3];
+    for d in 0..D::N {
+        let a = (region.lo.as_ref()[d] + shift.as_ref()[d] - geom.origin.as_ref()[d]) * geom.inv_h;
+        let b = (region.hi.as_ref()[d] + shift.as_ref()[d] - geom.origin.as_ref()[d]) * geom.inv_h;
+        let n = geom.n.as_ref()[d];
+        // One node of margin each side: `contains` decides, not the rounding of ξ.
+        let first = (a.ceil() - 1.0).max(0.0);
+        let last = (b.floor() + 1.0).min(n as f64 - 1.0);
+        if !(first.is_finite() && last.is_finite()) || last < first {
+            return Vec::new();
+        }
+        lo[d] = first as usize;
+        hi[d] = last as usize;
+    }
+    let mut out = Vec::new();
+    let mut i = D::U::default();
+    let (nz0, nz1) = if D::N == 3 { (lo[2], hi[2]) } else { (0, 0) };
+    for ix in lo[0]..=hi[0] {
+        for iy in lo[1]..=hi[1] {
+            for iz in nz0..=nz1 {
+                i.as_mut()[0] = ix;
+                i.as_mut()[1] = iy;
+                if D::N == 3 {
+                    i.as_mut()[2] = iz;
+                }
+                let p = geom.node_pos(&i);
+                let mut q = p;
+                for d in 0..D::N {
+                    q.as_mut()[d] -= shift.as_ref()[d];
+                }
+                if (region.contains)(&q) {
+                    out.push(geom.index(&i) as u32);
+                }
+            }
+        }
+    }
+    out
+}
+
+impl<D: Dim> BcNodes<D> {
+    /// The displacement of the prescribed components from 0 to `t` (closed form of the ramp).
+    fn displacement(&self, t: f64) -> D::V {
+        let s = &self.spec;
+        let mut out = D::V::default();
+        let (a, b) = (s.start, t.min(s.end));
+        if b <= a {
+            return out;
+        }
+        let r = s.ramp;
+        let big_f = |tau: f64| {
+            if r <= 0.0 {
+                tau
+            } else if tau <= r {
+                tau * tau / (2.0 * r)
+            } else {
+                0.5 * r + (tau - r)
+            }
+        };
+        let dist = big_f(b) - big_f(a);
+        for d in 0..D::N {
+            out.as_mut()[d] = s.velocity[d].unwrap_or(0.0) * dist;
+        }
+        out
+    }
+
+    /// Prescribed components at time t (None where free or inactive).
+    fn velocity(&self, t: f64) -> [Option<f64>; 3] {
+        let s = &self.spec;
+        if t < s.start || t > s.end {
+            return [None; 3];
+        }
+        let r = if s.ramp > 0.0 {
+            (t / s.ramp).min(1.0)
+        } else {
+            1.0
+        };
+        [
+            s.velocity[0].map(|v| v * r),
+            s.velocity[1].map(|v| v * r),
+            s.velocity[2].map(|v| v * r),
+        ]
+    }
+
+    /// A moving condition: its nodes for the displacement at `t` (the nearest face, as 2D).
+    fn follow(&mut self, t: f64, geom: &GridGeom<D>) {
+        if !self.spec.moving {
+            return;
+        }
+        let d = self.displacement(t);
+        let len = d.as_ref().iter().map(|v| v * v).sum::<f64>().sqrt();
+        let mut shift = d;
+        if len > 0.0 {
+            let k = 1.0 + 0.5 * geom.h / len;
+            for v in shift.as_mut() {
+                *v *= k;
+            }
+        }
+        if shift != self.shift {
+            self.nodes = nodes_in(&self.spec.region, &shift, geom);
+            self.shift = shift;
+        }
+    }
+}
+
+impl<D: Dim> Simulation<D> {
+    /// Build a simulation (CPU backend, portable arithmetic).
+    pub fn new(spec: Spec<D>) -> Result<Simulation<D>, BuildError> {
+        Self::with_backend(spec, Box::new(Cpu))
+    }
+
+    /// Build a simulation on the given backend.
+    pub fn with_backend(
+        spec: Spec<D>,
+        backend: Box<dyn Backend<D>>,
+    ) -> Result<Simulation<D>, BuildError> {
+        if spec.particles.is_empty() {
+            return Err(BuildError::Spec("no particles".into()));
+        }
+        if !(spec.dt > 0.0 && spec.h > 0.0) {
+            return Err(BuildError::Spec(format!(
+                "time step {} and cell size {} must be > 0",
+                spec.dt, spec.h
+            )));
+        }
+        let threads = spec.threads.max(1);
+        let pool = rayon::ThreadPoolBuilder::new()
+            .num_threads(threads)
+            .build()
+            .map_err(|e| BuildError::Threads(e.to_string()))?;
+        let geom = GridGeom::<D>::new(spec.min, spec.max, spec.h);
+        let bcs = spec
+            .bcs
+            .iter()
+            .map(|b| BcNodes {
+                nodes: nodes_in(&b.region, &D::V::default(), &geom),
+                spec: b.clone(),
+                shift: D::V::default(),
+            })
+            .collect();
+        let n = spec.particles.len();
+        let c_max = spec.materials.iter().map(|m| m.c_l).fold(0.0, f64::max);
+        let mass_total: f64 = spec.particles.mech.iter().map(|m| m.m).sum();
+        let model = Model {
+            geom,
+            shape: spec.shape,
+            mats: spec.materials,
+            bcs,
+            loads: spec.loads.clone(),
+            damping: spec.damping,
+            dt: spec.dt,
+            total_steps: spec.total_steps,
+            // Gathers must use every node with mass: skipping light nodes breaks Σ∇S = 0.
+            m_tiny: f64::MIN_POSITIVE,
+            energy_scale: 1e-12 * mass_total * c_max * c_max,
+            kernel: Kernel::Portable,
+            threads,
+            pool: std::sync::Arc::new(pool),
+            scene_hash: spec.scene_hash,
+        };
+        let mut spare = Particles::<D>::default();
+        spare.kin.resize(n, Default::default());
+        spare.mech.resize(n, Default::default());
+        spare.stress.resize(n, Default::default());
+        spare.cold.resize(n, Default::default());
+        spare.wden.resize(n, 0.0);
+        let scratch = Scratch {
+            nodes: vec![Node::default(); geom.storage_len()],
+            active: None,
+            active_nodes: 0,
+            load_now: vec![D::V::default(); spec.loads.len()],
+            sort_keys: vec![0; n],
+            sort_count: Vec::new(),
+            sort_perm: vec![0; n],
+            spare,
+            plane_sums: vec![0.0; geom.cols],
+            times: PassTimes::default(),
+        };
+        let mut state = State {
+            parts: spec.particles,
+            needs_sort: true,
+            strip_bounds: vec![0; geom.strips + 1],
+            time: 0.0,
+            steps: 0,
+            ledger: Ledger::default(),
+        };
+        state.ledger.kinetic = kinetic_energy(&state.parts);
+        state.ledger.initial_total = state.ledger.kinetic;
+        Ok(Simulation {
+            state,
+            model,
+            scratch,
+            backend,
+        })
+    }
+
+    /// The arithmetic of the particle passes (portable by default; FMA where the CPU has it).
+    pub fn set_kernel(&mut self, kernel: Kernel) -> Kernel {
+        self.model.kernel = if kernel.available() {
+            kernel
+        } else {
+            Kernel::Portable
+        };
+        self.model.kernel
+    }
+
+    /// The backend's name.
+    pub fn backend_name(&self) -> &'static str {
+        self.backend.name()
+    }
+
+    /// Replace every particle's velocity by `f(x0)` of its initial position (initial
+    /// conditions richer than a uniform velocity, e.g. a vibration mode).
+    pub fn set_velocities(&mut self, f: impl Fn(&D::V) -> D::V) {
+        let p = &mut self.state.parts;
+        for (k, c) in p.kin.iter_mut().zip(&p.cold) {
+            k.v = f(&c.x0);
+        }
+        let l = &mut self.state.ledger;
+        l.kinetic = kinetic_energy(&self.state.parts);
+        l.initial_total = l.kinetic + l.strain + l.dissipated - l.external_work;
+    }
+
+    /// Simulated time (s).
+    pub fn time(&self) -> f64 {
+        self.state.time
+    }
+    /// Steps taken.
+    pub fn steps_taken(&self) -> u64 {
+        self.state.steps
+    }
+    /// Time step (s).
+    pub fn time_step(&self) -> f64 {
+        self.model.dt
+    }
+    /// Whether the end time is reached.
+    pub fn is_finished(&self) -> bool {
+        self.state.steps >= self.model.total_steps
+    }
+    /// The energy ledger.
+    pub fn ledger(&self) -> Ledger {
+        self.state.ledger
+    }
+    /// The particles.
+    pub fn particles(&self) -> &Particles<D> {
+        &self.state.parts
+    }
+    /// The grid geometry.
+    pub fn grid(&self) -> &GridGeom<D> {
+        &self.model.geom
+    }
+    /// Wall time of each pass so far.
+    pub fn pass_times(&self) -> PassTimes {
+        self.scratch.times
+    }
+    /// Total momentum Σ m v of the particles.
+    pub fn momentum(&self) -> [f64; 3] {
+        let p = &self.state.parts;
+        let mut out = [0.0; 3];
+        for (k, m) in p.kin.iter().zip(&p.mech) {
+            for d in 0..D::N {
+                out[d] += m.m * k.v.as_ref()[d];
+            }
+        }
+        out
+    }
+
+    /// Advance one time step.
+    pub fn step(&mut self) -> Result<StepStats, StepError> {
+        let pool = std::sync::Arc::clone(&self.model.pool);
+        pool.install(|| self.step_inner())
+    }
+
+    fn step_inner(&mut self) -> Result<StepStats, StepError> {
+        let t = Instant::now();
+        if self.state.needs_sort {
+            self.sort()?;
+        }
+        let mut mark = Instant::now();
+        self.scratch.times.sort += (mark - t).as_secs_f64();
+        let mut lap = |slot: fn(&mut PassTimes) -> &mut f64, sc: &mut Scratch<D>| {
+            let now = Instant::now();
+            *slot(&mut sc.times) += (now - mark).as_secs_f64();
+            mark = now;
+        };
+        let dt = self.model.dt;
+        let t0 = self.state.time;
+        let t1 = t0 + dt;
+        self.reset_grid();
+        self.ramp_loads(t0);
+        lap(|t| &mut t.grid, &mut self.scratch);
+
+        let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
+        let acc = self.backend.p2g(m, st, sc);
+        lap(|t| &mut t.p2g, &mut self.scratch);
+        self.check(&acc)?;
+        self.set_active(&acc);
+        self.apply_bc_momentum(t0, false);
+        self.nodal(0);
+        lap(|t| &mut t.grid, &mut self.scratch);
+
+        let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
+        let acc = self.backend.forces(m, st, sc);
+        lap(|t| &mut t.forces, &mut self.scratch);
+        self.check(&acc)?;
+        self.damp_forces();
+        self.bc_force_fix(t1);
+        self.nodal(1);
+        lap(|t| &mut t.grid, &mut self.scratch);
+
+        let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
+        let acc = self.backend.update(m, st, sc);
+        lap(|t| &mut t.update, &mut self.scratch);
+        self.check(&acc)?;
+        let l = &mut self.state.ledger;
+        l.kinetic = acc.e;
+        l.external_work += acc.w;
+        l.work_abs += acc.w.abs();
+        self.state.needs_sort |= acc.resort;
+        self.apply_bc_momentum(t1, true);
+        self.nodal(2);
+        lap(|t| &mut t.grid, &mut self.scratch);
+
+        let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
+        let acc = self.backend.strain(m, st, sc);
+        lap(|t| &mut t.strain, &mut self.scratch);
+        self.check(&acc)?;
+        self.state.ledger.strain = acc.e;
+        self.state.time = t1;
+        self.state.steps += 1;
+
+        // Energy blow-up: kinetic + strain far above everything ever put in.
+        let l = self.state.ledger;
+        let energy = l.kinetic + l.strain;
+        let reference = l.initial_total.abs() + l.work_abs + l.dissipated;
+        if !energy.is_finite() || energy > 10.0 * reference + self.model.energy_scale {
+            return Err(StepError::EnergyBlowUp {
+                step: self.state.steps,
+                energy,
+                reference,
+            });
+        }
+        Ok(StepStats {
+            active_nodes: self.scratch.active_nodes,
+        })
+    }
+
+    fn position3(&self, i: usize) -> [f64; 3] {
+        let mut p = [0.0; 3];
+        p[..D::N].copy_from_slice(self.state.parts.kin[i].x.as_ref());
+        p
+    }
+
+    /// The step error of a pass's first failure, if any.
+    fn check(&self, acc: &Acc) -> Result<(), StepError> {
+        let Some((i, kind)) = acc.fail else {
+            return Ok(());
+        };
+        let particle = self.state.parts.cold[i].id as usize;
+        let step = self.state.steps + 1;
+        let position = self.position3(i);
+        Err(match kind {
+            FAIL_GRID => StepError::LeftGrid {
+                step,
+                particle,
+                position,
+                dims: D::N,
+            },
+            _ => StepError::NonFinite {
+                step,
+                particle,
+                quantity: match kind {
+                    FAIL_VELOCITY => "velocity",
+                    FAIL_POSITION => "position",
+                    _ => "stress",
+                },
+                position,
+                dims: D::N,
+            },
+        })
+    }
+
+    /// Counting sort of the particles by cell (x-plane major), and the strip bounds.
+    fn sort(&mut self) -> Result<(), StepError> {
+        let geom = self.model.geom;
+        let mut nc = [1usize; 3];
+        for d in 0..D::N {
+            nc[d] = geom.n.as_ref()[d] - 1;
+        }
+        let ncells: usize = nc.iter().product();
+        let plane_cells = ncells / nc[0];
+        let sc = &mut self.scratch;
+        let p = &mut self.state.parts;
+        for (i, k) in p.kin.iter().enumerate() {
+            let c = geom.cell(&k.x);
+            let mut key = 0usize;
+            for d in 0..D::N {
+                if c[d] < 1 || c[d] as usize + 2 > nc[d] {
+                    let mut position = [0.0; 3];
+                    position[..D::N].copy_from_slice(k.x.as_ref());
+                    return Err(StepError::LeftGrid {
+                        step: self.state.steps,
+                        particle: p.cold[i].id as usize,
+                        position,
+                        dims: D::N,
+                    });
+                }
+                key = key * nc[d] + c[d] as usize;
+            }
+            sc.sort_keys[i] = key as u32;
+        }
+        sc.sort_count.clear();
+        sc.sort_count.resize(ncells + 1, 0);
+        for &k in &sc.sort_keys {
+            sc.sort_count[k as usize + 1] += 1;
+        }
+        for c in 0..ncells {
+            sc.sort_count[c + 1] += sc.sort_count[c];
+        }
+        // Strip bounds: first particle with cell plane ≥ s·STRIP.
+        for s in 0..=geom.strips {
+            let col = (s * STRIP).min(nc[0]);
+            self.state.strip_bounds[s] = sc.sort_count[col * plane_cells] as usize;
+        }
+        for (i, &k) in sc.sort_keys.iter().enumerate() {
+            let dst = &mut sc.sort_count[k as usize];
+            sc.sort_perm[i] = *dst;
+            *dst += 1;
+        }
+        let s = &mut sc.spare;
+        for (i, &d) in sc.sort_perm.iter().enumerate() {
+            let d = d as usize;
+            s.kin[d] = p.kin[i];
+            s.mech[d] = p.mech[i];
+            s.stress[d] = p.stress[i];
+            s.wden[d] = p.wden[i];
+            s.cold[d] = p.cold[i];
+        }
+        std::mem::swap(&mut p.kin, &mut s.kin);
+        std::mem::swap(&mut p.mech, &mut s.mech);
+        std::mem::swap(&mut p.stress, &mut s.stress);
+        std::mem::swap(&mut p.wden, &mut s.wden);
+        std::mem::swap(&mut p.cold, &mut s.cold);
+        self.state.needs_sort = false;
+        Ok(())
+    }
+
+    /// Apply `f` to every node of the active box, planes in parallel; per-plane results
+    /// are summed in plane order.
+    fn each_active(&mut self, f: impl Fn(&mut Node<D>) -> f64 + Sync) -> f64 {
+        let Some((lo, hi)) = self.scratch.active else {
+            return 0.0;
+        };
+        let geom = self.model.geom;
+        let plane = geom.plane();
+        let (x0, x1) = (lo.as_ref()[0], hi.as_ref()[0]);
+        let planes = &mut self.scratch.nodes[(x0 + PAD) * plane..(x1 + 1 + PAD) * plane];
+        let sums = &mut self.scratch.plane_sums[..x1 + 1 - x0];
+        let (lo, hi) = (lo, hi);
+        planes
+            .par_chunks_mut(plane)
+            .zip(sums.par_iter_mut())
+            .for_each(|(c, s)| {
+                let mut acc = 0.0;
+                if D::N == 2 {
+                    let (y0, y1) = (lo.as_ref()[1], hi.as_ref()[1]);
+                    for n in &mut c[y0..=y1] {
+                        acc += f(n);
+                    }
+                } else {
+                    let nz = geom.strides.as_ref()[1];
+                    let (y0, y1) = (lo.as_ref()[1], hi.as_ref()[1]);
+                    let (z0, z1) = (lo.as_ref()[2], hi.as_ref()[2]);
+                    for iy in y0..=y1 {
+                        for n in &mut c[iy * nz + z0..=iy * nz + z1] {
+                            acc += f(n);
+                        }
+                    }
+                }
+                *s = acc;
+            });
+        sums.iter().sum()
+    }
+
+    /// Zero the grid where the last step wrote.
+    fn reset_grid(&mut self) {
+        self.each_active(|n| {
+            *n = Node::default();
+            0.0
+        });
+    }
+
+    /// The active box of a P2G's reduction (clamped) and the number of nodes with mass.
+    fn set_active(&mut self, acc: &Acc) {
+        if !acc.has_box {
+            self.scratch.active = None;
+            self.scratch.active_nodes = 0;
+            return;
+        }
+        let g = self.model.geom;
+        let mut lo = D::U::default();
+        let mut hi = D::U::default();
+        for d in 0..D::N {
+            lo.as_mut()[d] = acc.lo[d].max(0) as usize;
+            hi.as_mut()[d] = (acc.hi[d] as usize).min(g.n.as_ref()[d] - 1);
+        }
+        self.scratch.active = Some((lo, hi));
+        let m_tiny = self.model.m_tiny;
+        self.scratch.active_nodes =
+            self.each_active(|n| if n.m > m_tiny { 1.0 } else { 0.0 }) as usize;
+    }
+
+    /// Nodal velocity (stage 0: p/m; 2: q/m) or acceleration (stage 1: f/m).
+    fn nodal(&mut self, stage: u8) {
+        let m_tiny = self.model.m_tiny;
+        self.each_active(move |n| {
+            if n.m > m_tiny {
+                let inv = 1.0 / n.m;
+                for d in 0..D::N {
+                    match stage {
+                        0 => n.v.as_mut()[d] = n.p.as_ref()[d] * inv,
+                        1 => n.a.as_mut()[d] = n.f.as_ref()[d] * inv,
+                        _ => n.v.as_mut()[d] = n.q.as_ref()[d] * inv,
+                    }
+                }
+            } else {
+                n.v = D::V::default();
+                n.a = D::V::default();
+            }
+            0.0
+        });
+    }
+
+    /// The loads' ramped tractions at `t0`, and moving conditions' nodes.
+    fn ramp_loads(&mut self, t0: f64) {
+        let geom = self.model.geom;
+        for bc in &mut self.model.bcs {
+            bc.follow(t0, &geom);
+        }
+        for (l, out) in self
+            .model
+            .loads
+            .iter()
+            .zip(self.scratch.load_now.iter_mut())
+        {
+            let r = if l.ramp > 0.0 {
+                (t0 / l.ramp).min(1.0)
+            } else {
+                1.0
+            };
+            for d in 0..D::N {
+                out.as_mut()[d] = l.traction.as_ref()[d] * r;
+            }
+        }
+    }
+
+    /// Velocity conditions on the extrapolated (p) or re-extrapolated (q) momenta.
+    fn apply_bc_momentum(&mut self, t: f64, reextrapolated: bool) {
+        let m_tiny = self.model.m_tiny;
+        for bc in &self.model.bcs {
+            let v = bc.velocity(t);
+            if v[..D::N].iter().all(Option::is_none) {
+                continue;
+            }
+            for &i in &bc.nodes {
+                let n = &mut self.scratch.nodes[i as usize];
+                if n.m <= m_tiny {
+                    continue;
+                }
+                let target = if reextrapolated { &mut n.q } else { &mut n.p };
+                for d in 0..D::N {
+                    if let Some(vk) = v[d] {
+                        target.as_mut()[d] = n.m * vk;
+                    }
+                }
+            }
+        }
+    }
+
+    /// Conditions after the force pass: the force that makes p + Δt f meet the prescribed
+    /// velocity; the reaction does work at the node's mid-step velocity.
+    fn bc_force_fix(&mut self, t1: f64) {
+        let dt = self.model.dt;
+        let m_tiny = self.model.m_tiny;
+        let mut work = 0.0;
+        for bc in &self.model.bcs {
+            let v = bc.velocity(t1);
+            if v[..D::N].iter().all(Option::is_none) {
+                continue;
+            }
+            for &i in &bc.nodes {
+                let n = &mut self.scratch.nodes[i as usize];
+                if n.m <= m_tiny {
+                    continue;
+                }
+                for d in 0..D::N {
+                    if let Some(vk) = v[d] {
+                        let p = n.p.as_ref()[d];
+                        let f_new = (n.m * vk - p) / dt;
+                        let v_mid = 0.5 * (p / n.m + vk);
+                        work += (f_new - n.f.as_ref()[d]) * v_mid * dt;
+                        n.f.as_mut()[d] = f_new;
+                    }
+                }
+            }
+        }
+        let l = &mut self.state.ledger;
+        l.external_work += work;
+        l.work_abs += work.abs();
+    }
+
+    /// Damping after the force pass; the work it removes is dissipated.
+    fn damp_forces(&mut self) {
+        let dt = self.model.dt;
+        let m_tiny = self.model.m_tiny;
+        let damp = self.model.damping.clone();
+        if matches!(damp, Damping::None) {
+            return;
+        }
+        let d = self.each_active(move |n| {
+            if n.m <= m_tiny {
+                return 0.0;
+            }
+            let mut v = D::V::default();
+            for d in 0..D::N {
+                v.as_mut()[d] = n.p.as_ref()[d] / n.m;
+            }
+            let mut out = 0.0;
+            match damp {
+                Damping::Viscous { coefficient } => {
+                    for d in 0..D::N {
+                        let fd = coefficient * n.p.as_ref()[d];
+                        n.f.as_mut()[d] -= fd;
+                        out += fd * v.as_ref()[d];
+                    }
+                    out * dt
+                }
+                Damping::Kinetic { coefficient } => {
+                    for d in 0..D::N {
+                        let fd = coefficient * n.f.as_ref()[d].abs() * v.as_ref()[d].signum();
+                        n.f.as_mut()[d] -= fd;
+                        out += fd * v.as_ref()[d] * dt;
+                    }
+                    out
+                }
+                Damping::None => 0.0,
+            }
+        });
+        self.state.ledger.dissipated += d;
+    }
+
+    /// The grid nodes of the last step (storage layout of [`GridGeom`]).
+    pub fn nodes(&self) -> &[Node<D>] {
+        &self.scratch.nodes
+    }
+}
+
+fn kinetic_energy<D: Dim>(p: &Particles<D>) -> f64 {
+    p.kin
+        .iter()
+        .zip(&p.mech)
+        .map(|(k, m)| {
+            let mut v2 = 0.0;
+            for d in 0..D::N {
+                v2 += k.v.as_ref()[d] * k.v.as_ref()[d];
+            }
+            0.5 * m.m * v2
+        })
+        .sum()
+}
