@@ -12,11 +12,16 @@
 //! a scene whose estimate exceeds its `max_memory_bytes` and caps its workers' memory at
 //! the estimate plus a margin.
 //!
+//! The 3D estimates ([`memory_estimate3`], [`BYTES_PER_NODE_3D`], [`BYTES_PER_PARTICLE_3D`])
+//! are made before the 3D solver's storage is fixed: estimates by analogy with 2D, to be
+//! replaced by the solver's own accounting.
+//!
 //! Everything here is O(1) in the number of particles: it can run on an async thread, and
 //! before the lattice walk of validation (with a particle estimate) as well as after it
 //! (with the exact count).
 
 use crate::scene::{FieldKind, Scene};
+use crate::scene3::{Axis, Scene3};
 
 /// Bytes per grid node of the dense grid (one `Node`: mass, five 2-vectors).
 pub const BYTES_PER_NODE: u64 = 104;
@@ -158,11 +163,16 @@ pub fn memory_estimate(scene: &Scene, particles: u64) -> MemoryEstimate {
 /// Time steps of a run, from the scene alone (as validation computes them), or `None`
 /// when the time step is not a positive finite number.
 pub fn steps_estimate(scene: &Scene) -> Option<u64> {
-    let dt = scene.time_step()?;
-    if !(dt.is_finite() && dt > 0.0 && scene.time.end.is_finite()) {
+    steps_of(scene.time_step()?, scene.time.end)
+}
+
+/// ⌈end/Δt⌉ (less a rounding allowance, as validation counts), saturating; `None` when Δt
+/// is not a positive finite number or `end` is not finite.
+fn steps_of(dt: f64, end: f64) -> Option<u64> {
+    if !(dt.is_finite() && dt > 0.0 && end.is_finite()) {
         return None;
     }
-    let s = (scene.time.end / dt * (1.0 - 1e-12)).ceil();
+    let s = (end / dt * (1.0 - 1e-12)).ceil();
     if s.is_finite() && s >= 0.0 {
         Some(if s >= u64::MAX as f64 {
             u64::MAX
@@ -177,6 +187,87 @@ pub fn steps_estimate(scene: &Scene) -> Option<u64> {
 /// The work of a run: particles × steps, saturating.
 pub fn particle_steps(particles: u64, steps: u64) -> u64 {
     particles.saturating_mul(steps)
+}
+
+/// Bytes per grid node of a 3D run (an estimate made before the 3D solver's storage is
+/// fixed): mass, momentum, force, re-extrapolated momentum, velocity and acceleration, 16
+/// `f64`.
+pub const BYTES_PER_NODE_3D: u64 = 16 * 8;
+/// Bytes per particle of a 3D run (an estimate): twice the 2D particle's
+/// ([`BYTES_PER_PARTICLE`]), for 3-vectors, 3×3 gradients, six stress and strain components
+/// and 27-node weights.
+pub const BYTES_PER_PARTICLE_3D: u64 = 2 * BYTES_PER_PARTICLE;
+
+/// Grid nodes in x, y and z of a 3D scene's grid box (as validation counts them, saturated),
+/// or `None` for a grid validation refuses.
+pub fn grid_dims3(scene: &Scene3) -> Option<(u64, u64, u64)> {
+    scene.grid.node_counts().map(|[x, y, z]| (x, y, z))
+}
+
+/// Components a 3D snapshot records per node (an upper bound).
+fn snapshot_components3(scene: &Scene3) -> u64 {
+    scene
+        .output
+        .fields
+        .iter()
+        .map(|f| match f {
+            FieldKind::Stress => 7, // six components and the von Mises stress
+            FieldKind::Strain => 6,
+            FieldKind::Velocity => 4,
+            FieldKind::Displacement => 3,
+            FieldKind::Fringe => 0, // refused in 3D
+            FieldKind::Material => 1,
+        })
+        .sum()
+}
+
+/// The memory estimate of a 3D run of `scene` with `particles` particles (the exact count, or
+/// an estimate before the lattice walk): the dense grid at [`BYTES_PER_NODE_3D`], the
+/// particles at [`BYTES_PER_PARTICLE_3D`], no crack tables (3D cracks are refused), and one
+/// snapshot in flight (accumulators over the whole grid, then the slices' `f32` values three
+/// times, as 2D). An estimate meant to be on the safe side; saturates instead of
+/// overflowing.
+pub fn memory_estimate3(scene: &Scene3, particles: u64) -> MemoryEstimate {
+    let (nx, ny, nz) = grid_dims3(scene).unwrap_or((0, 0, 0));
+    let nodes = nx.saturating_mul(ny).saturating_mul(nz);
+    let grid = nodes.saturating_mul(BYTES_PER_NODE_3D);
+    let snapshot = if scene.output.snapshot_interval > 0.0 {
+        let nc = snapshot_components3(scene);
+        let plane = |normal: Axis| match normal {
+            Axis::X => ny.saturating_mul(nz),
+            Axis::Y => nx.saturating_mul(nz),
+            Axis::Z => nx.saturating_mul(ny),
+        };
+        let slice_nodes = scene
+            .output
+            .slices_or_default(&scene.grid)
+            .iter()
+            .fold(0u64, |n, s| n.saturating_add(plane(s.normal)));
+        nodes
+            .saturating_mul(8 + nc.saturating_mul(8))
+            .saturating_add(slice_nodes.saturating_mul(nc.saturating_mul(3 * 4)))
+    } else {
+        0
+    };
+    let particles = particles.saturating_mul(BYTES_PER_PARTICLE_3D);
+    let total = grid
+        .saturating_add(particles)
+        .saturating_add(snapshot)
+        .saturating_add(BASE_BYTES);
+    MemoryEstimate {
+        grid,
+        particles,
+        cracks: 0,
+        snapshot,
+        base: BASE_BYTES,
+        total,
+    }
+}
+
+/// Time steps of a 3D run, from the scene alone (as validation computes them), or `None`
+/// when the time step is not a positive finite number.
+pub fn steps_estimate3(scene: &Scene3) -> Option<u64> {
+    steps_of(scene.time_step()?, scene.time.end)
 }
 
 #[cfg(test)]

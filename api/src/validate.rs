@@ -4,6 +4,7 @@
 //! too, via `serde_path_to_error`); [`validate`] checks the physics and geometry and returns
 //! the size of the run.
 
+use std::collections::BTreeMap;
 use std::fmt;
 
 use schemars::JsonSchema;
@@ -12,7 +13,7 @@ use serde::{Deserialize, Serialize};
 use crate::lattice;
 use crate::scene::{
     Analysis, CohesiveLaw, ContactLaw, Damping, FieldKind, GrowthDirection, GrowthSpeed, JIntegral,
-    Propagation, Region, Scene, Toughness, Vec2,
+    Material, Propagation, Region, Scene, TimeControl, Toughness, Vec2,
 };
 
 /// The largest `time.cfl` a scene with an exponential or cubic interface may use: their stiff
@@ -72,6 +73,14 @@ pub struct RunSize {
 
 /// Parse a scene from JSON text; syntax, type and unknown-field errors name their path.
 pub fn parse_scene(text: &str) -> Result<Scene, ValidationErrors> {
+    parse_with_path(text)
+}
+
+/// Deserialize `T` from JSON text; the error names its JSON path (`(document)` for the
+/// whole document). Shared by the 2D and 3D scene parsers.
+pub(crate) fn parse_with_path<T: serde::de::DeserializeOwned>(
+    text: &str,
+) -> Result<T, ValidationErrors> {
     let de = &mut serde_json::Deserializer::from_str(text);
     serde_path_to_error::deserialize(de).map_err(|e| {
         let path = e.path().to_string();
@@ -104,19 +113,25 @@ pub fn scene_from_value(value: serde_json::Value) -> Result<Scene, ValidationErr
     })
 }
 
-struct Checker {
-    errors: Vec<ValidationError>,
+/// Collects validation problems (shared by the 2D and 3D validators).
+pub(crate) struct Checker {
+    pub(crate) errors: Vec<ValidationError>,
 }
 
 impl Checker {
-    fn err(&mut self, path: impl Into<String>, value: impl Serialize, reason: impl Into<String>) {
+    pub(crate) fn err(
+        &mut self,
+        path: impl Into<String>,
+        value: impl Serialize,
+        reason: impl Into<String>,
+    ) {
         self.errors.push(ValidationError {
             path: path.into(),
             value: serde_json::to_string(&value).unwrap_or_default(),
             reason: reason.into(),
         });
     }
-    fn finite(&mut self, path: &str, v: f64) -> bool {
+    pub(crate) fn finite(&mut self, path: &str, v: f64) -> bool {
         if v.is_finite() {
             true
         } else {
@@ -128,12 +143,12 @@ impl Checker {
             false
         }
     }
-    fn positive(&mut self, path: &str, v: f64) {
+    pub(crate) fn positive(&mut self, path: &str, v: f64) {
         if self.finite(path, v) && v <= 0.0 {
             self.err(path, v, "must be > 0");
         }
     }
-    fn non_negative(&mut self, path: &str, v: f64) {
+    pub(crate) fn non_negative(&mut self, path: &str, v: f64) {
         if self.finite(path, v) && v < 0.0 {
             self.err(path, v, "must be ≥ 0");
         }
@@ -225,7 +240,7 @@ impl std::ops::Deref for ValidScene {
 /// Constants that are each valid can still give a dilatational wave speed that is not a
 /// finite positive number (E/ρ overflows or underflows: density 1e-300), and so no time
 /// step: name the more extreme of the two constants, with its value.
-fn wave_speed(c: &mut Checker, p: &str, rho: f64, e: f64, nu: f64, analysis: Analysis) {
+pub(crate) fn wave_speed(c: &mut Checker, p: &str, rho: f64, e: f64, nu: f64, analysis: Analysis) {
     let ok = |x: f64| x.is_finite() && x > 0.0;
     if !(ok(rho) && ok(e) && nu > -1.0 && nu < 0.5) {
         return; // already reported
@@ -255,6 +270,55 @@ fn wave_speed(c: &mut Checker, p: &str, rho: f64, e: f64, nu: f64, analysis: Ana
     );
 }
 
+/// The materials: at least one; ρ > 0, E > 0, ν in (-1, 0.5), and a finite c_L.
+pub(crate) fn check_materials(
+    c: &mut Checker,
+    materials: &BTreeMap<String, Material>,
+    analysis: Analysis,
+) {
+    if materials.is_empty() {
+        c.err(
+            "materials",
+            serde_json::json!({}),
+            "must define at least one material",
+        );
+    }
+    for (name, m) in materials {
+        let p = format!("materials.{name}");
+        c.positive(&format!("{p}.density"), m.density());
+        c.positive(&format!("{p}.youngs_modulus"), m.youngs_modulus());
+        let nu = m.poissons_ratio();
+        let np = format!("{p}.poissons_ratio");
+        if c.finite(&np, nu) && !(nu > -1.0 && nu < 0.5) {
+            c.err(np, nu, "is outside (-1, 0.5)");
+        } else {
+            wave_speed(c, &p, m.density(), m.youngs_modulus(), nu, analysis);
+        }
+    }
+}
+
+/// `time.end` > 0 and `time.cfl` in (0, 1].
+pub(crate) fn check_time(c: &mut Checker, time: &TimeControl) {
+    c.positive("time.end", time.end);
+    let cfl = time.cfl;
+    if c.finite("time.cfl", cfl) && !(cfl > 0.0 && cfl <= 1.0) {
+        c.err("time.cfl", cfl, "is outside (0, 1]");
+    }
+}
+
+/// The damping coefficient: kinetic in [0, 1), viscous ≥ 0.
+pub(crate) fn check_damping(c: &mut Checker, damping: &Damping) {
+    match *damping {
+        Damping::None => {}
+        Damping::Kinetic { coefficient } => {
+            if c.finite("damping.coefficient", coefficient) && !(0.0..1.0).contains(&coefficient) {
+                c.err("damping.coefficient", coefficient, "is outside [0, 1)");
+            }
+        }
+        Damping::Viscous { coefficient } => c.non_negative("damping.coefficient", coefficient),
+    }
+}
+
 /// Validate a scene. Returns the run size, or every problem found.
 pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
     let mut c = Checker { errors: Vec::new() };
@@ -263,7 +327,8 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
         c.err(
             "analysis",
             "3d",
-            "is reserved: this solver is 2D (use plane_strain or plane_stress)",
+            "is a 3D scene: read it with fracture_api::parse_any_scene (or as a Scene3), \
+             whose format is docs/scenes-3d.md; a 2D scene takes plane_strain or plane_stress",
         );
     }
     c.positive("thickness", scene.thickness);
@@ -299,39 +364,10 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
     }
 
     // Materials.
-    if scene.materials.is_empty() {
-        c.err(
-            "materials",
-            serde_json::json!({}),
-            "must define at least one material",
-        );
-    }
-    for (name, m) in &scene.materials {
-        let p = format!("materials.{name}");
-        c.positive(&format!("{p}.density"), m.density());
-        c.positive(&format!("{p}.youngs_modulus"), m.youngs_modulus());
-        let nu = m.poissons_ratio();
-        let np = format!("{p}.poissons_ratio");
-        if c.finite(&np, nu) && !(nu > -1.0 && nu < 0.5) {
-            c.err(np, nu, "is outside (-1, 0.5)");
-        } else {
-            wave_speed(
-                &mut c,
-                &p,
-                m.density(),
-                m.youngs_modulus(),
-                nu,
-                scene.analysis,
-            );
-        }
-    }
+    check_materials(&mut c, &scene.materials, scene.analysis);
 
     // Time.
-    c.positive("time.end", scene.time.end);
-    let cfl = scene.time.cfl;
-    if c.finite("time.cfl", cfl) && !(cfl > 0.0 && cfl <= 1.0) {
-        c.err("time.cfl", cfl, "is outside (0, 1]");
-    }
+    check_time(&mut c, &scene.time);
 
     // Bodies: region inside the grid (with the empty cell layer GIMP needs), known material.
     if scene.bodies.is_empty() {
@@ -750,15 +786,7 @@ pub fn validate(scene: &Scene) -> Result<RunSize, ValidationErrors> {
     }
 
     // Damping.
-    match scene.damping {
-        Damping::None => {}
-        Damping::Kinetic { coefficient } => {
-            if c.finite("damping.coefficient", coefficient) && !(0.0..1.0).contains(&coefficient) {
-                c.err("damping.coefficient", coefficient, "is outside [0, 1)");
-            }
-        }
-        Damping::Viscous { coefficient } => c.non_negative("damping.coefficient", coefficient),
-    }
+    check_damping(&mut c, &scene.damping);
 
     // Output.
     let o = &scene.output;
