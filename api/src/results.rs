@@ -389,6 +389,10 @@ pub struct Summary {
     /// has none.
     #[serde(default, skip_serializing_if = "Vec::is_empty")]
     pub references: Vec<crate::tips::ReferenceCheck>,
+    /// Spatial dimension of the run: `3` for a 3D scene (`three-d.md`); absent for 2D runs,
+    /// whose summaries are as before.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub dimension: Option<u32>,
 }
 
 /// Provenance of a run (`summary.provenance`).
@@ -481,6 +485,25 @@ pub struct Snapshot {
     /// the scene asks for them (`output.particles`). Absent otherwise.
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub particles: Option<ParticleSnapshot>,
+    /// (extension) For a 3D run: the grid plane this snapshot samples (`output.slices`);
+    /// its `origin`, `nx`, `ny` and the crack lines are in the plane's two axes. Absent for
+    /// 2D runs.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slice: Option<SnapshotSlice>,
+}
+
+/// (extension) The plane of a 3D run that a [`Snapshot`] samples.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct SnapshotSlice {
+    /// The axis normal to the plane: `x`, `y` or `z`.
+    pub normal: String,
+    /// Where the scene asked for the plane along that axis (m).
+    pub at: f64,
+    /// The node plane sampled (m): the grid plane nearest to `at`.
+    pub node_at: f64,
+    /// The plane's two axes, as the snapshot's x and y (`["x", "y"]` for a plane normal to z,
+    /// `["x", "z"]` normal to y, `["y", "z"]` normal to x).
+    pub axes: [String; 2],
 }
 
 /// (extension) The particles of a snapshot: positions and the snapshot's components at

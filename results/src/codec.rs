@@ -6,7 +6,7 @@
 //! with particles (`Snapshot::particles`, an extension), then their x, y and each particle
 //! component's values (the header's `particles`: the count and the component names).
 
-use fracture_api::results::{FieldComponent, ParticleSnapshot, Snapshot};
+use fracture_api::results::{FieldComponent, ParticleSnapshot, Snapshot, SnapshotSlice};
 use serde::{Deserialize, Serialize};
 
 const MAGIC: &[u8; 4] = b"FSN1";
@@ -25,6 +25,9 @@ struct Header {
     /// Particle count and component names (absent: no particles).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     particles: Option<(u64, Vec<String>)>,
+    /// The plane of a 3D run's slice (absent: a 2D snapshot).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    slice: Option<SnapshotSlice>,
 }
 
 /// A snapshot that could not be decoded.
@@ -54,6 +57,7 @@ pub fn encode_snapshot(s: &Snapshot) -> Vec<u8> {
                 p.components.iter().map(|c| c.name.clone()).collect(),
             )
         }),
+        slice: s.slice.clone(),
     };
     let h = serde_json::to_vec(&header).unwrap_or_default();
     let n: usize = s.components.iter().map(|c| c.values.len()).sum::<usize>()
@@ -146,6 +150,7 @@ pub fn decode_snapshot(b: &[u8]) -> Result<Snapshot, CodecError> {
         components,
         cracks: header.cracks,
         particles,
+        slice: header.slice,
     })
 }
 
@@ -169,12 +174,19 @@ mod tests {
             }],
             cracks: vec![vec![[0.0, 0.0], [1.0, 0.5]]],
             particles: None,
+            slice: Some(SnapshotSlice {
+                normal: "z".into(),
+                at: 0.01,
+                node_at: 0.0105,
+                axes: ["x".into(), "y".into()],
+            }),
         };
         let d = decode_snapshot(&encode_snapshot(&s)).expect("decodes");
         assert_eq!(d.index, 3);
         assert!(d.components[0].values[1].is_nan());
         assert_eq!(d.components[0].values[2], -2.0);
         assert_eq!(d.cracks, s.cracks);
+        assert_eq!(d.slice, s.slice);
         assert!(decode_snapshot(b"nope").is_err());
     }
 
@@ -201,6 +213,7 @@ mod tests {
                     values: vec![4.0, 6.0],
                 }],
             }),
+            slice: None,
         };
         let b = encode_snapshot(&s);
         assert_eq!(decode_snapshot(&b).expect("decodes"), s);

@@ -95,6 +95,9 @@ pub struct SnapshotMessage {
     /// (extension) The particles, when the scene records them (`output.particles`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     pub particles: Option<ParticlesMessage>,
+    /// (extension) The plane of a 3D run this snapshot samples.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub slice: Option<fracture_api::results::SnapshotSlice>,
 }
 
 /// The particles of a `/snapshot` message: positions (m) and each component per particle
@@ -164,6 +167,7 @@ impl From<&Snapshot> for SnapshotMessage {
                 y: p.y.clone(),
                 components: p.components.iter().map(ComponentMessage::from).collect(),
             }),
+            slice: s.slice.clone(),
         }
     }
 }
@@ -185,6 +189,7 @@ impl From<SnapshotMessage> for Snapshot {
                 y: p.y,
                 components: p.components.into_iter().map(FieldComponent::from).collect(),
             }),
+            slice: m.slice,
         }
     }
 }
@@ -536,10 +541,20 @@ impl<W: Write + Seek> McapWriter<W> {
 
     /// Record the scene (canonical JSON and hash) as the metadata record `scene`.
     pub fn write_scene(&mut self, scene: &Scene) -> Result<(), McapFileError> {
+        self.write_scene_parts(&scene.name, &scene.hash(), &scene.canonical_json())
+    }
+
+    /// The scene metadata of a scene of either dimension: its name, hash and canonical JSON.
+    pub fn write_scene_parts(
+        &mut self,
+        name: &str,
+        hash: &str,
+        json: &str,
+    ) -> Result<(), McapFileError> {
         let mut metadata = BTreeMap::new();
-        metadata.insert("name".to_string(), scene.name.clone());
-        metadata.insert("hash".to_string(), scene.hash());
-        metadata.insert("json".to_string(), scene.canonical_json());
+        metadata.insert("name".to_string(), name.to_string());
+        metadata.insert("hash".to_string(), hash.to_string());
+        metadata.insert("json".to_string(), json.to_string());
         metadata.insert(
             "solver_version".to_string(),
             fracture_api::SOLVER_VERSION.to_string(),

@@ -396,6 +396,7 @@ mod tests {
             }],
             cracks: vec![],
             particles: None,
+            slice: None,
         };
         assert!(matches!(
             image_data(&s),

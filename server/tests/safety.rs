@@ -693,6 +693,7 @@ fn summary() -> Summary {
         provenance: None,
         tips: Vec::new(),
         references: Vec::new(),
+        dimension: None,
     }
 }
 

@@ -190,6 +190,7 @@ async fn heartbeats_fencing_results_and_finish(store: Store) {
         }],
         cracks: vec![],
         particles: None,
+        slice: None,
     };
     for (i, v) in [(0, 1.0), (1, 2.0), (1, 3.0)] {
         let s = snap(i, v);

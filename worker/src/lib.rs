@@ -26,11 +26,13 @@ pub mod local;
 pub mod provenance;
 pub mod remote;
 mod run;
+mod run3;
 pub mod supervise;
 
 pub use checkpoint::{CheckpointAt, CheckpointPolicy};
 pub use local::{LocalOutput, LocalOutputError};
 pub use run::{run_job, run_scene};
+pub use run3::{run_job3, run_scene3};
 
 use std::time::Duration;
 

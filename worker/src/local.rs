@@ -133,6 +133,13 @@ impl LocalOutput {
             .map_err(|source| self.mcap_error(source))
     }
 
+    /// Record a 3D scene in `fields.mcap` (its metadata record, as [`LocalOutput::write_scene`]).
+    pub fn write_scene3(&mut self, scene: &fracture_api::Scene3) -> Result<(), LocalOutputError> {
+        self.mcap
+            .write_scene_parts(&scene.name, &scene.hash(), &scene.canonical_json())
+            .map_err(|source| self.mcap_error(source))
+    }
+
     /// The run directory.
     pub fn dir(&self) -> &Path {
         &self.dir

@@ -336,6 +336,7 @@ fn failed_summary(scene: Option<&Scene>, failure: FailureKind, message: String) 
         )),
         tips: Vec::new(),
         references: Vec::new(),
+        dimension: None,
     }
 }
 

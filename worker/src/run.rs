@@ -10,7 +10,8 @@ use std::time::Instant;
 use fracture_api::results::{
     CrackTipRow, EnergyRow, FailureKind, FractureEnergy, Progress, RunStatus, Snapshot, Summary,
 };
-use fracture_api::scene::FieldKind;
+use fracture_api::scene::{FieldKind, Output, Reference};
+use fracture_api::scene3::Scene3;
 use fracture_api::tips::{TipSummaryBuilder, check_references};
 use fracture_api::{Scene, ValidScene};
 use fracture_solver::{Simulation, SolverConfig, StepError, StepStats};
@@ -20,9 +21,9 @@ use crate::{Control, RunOptions, RunSink, SinkError};
 
 /// What the run loop needs from a simulation. Implemented by
 /// [`Simulation`]; tests drive the loop with scripted models.
-pub(crate) trait Model {
+pub trait Model {
     /// Advance one step; the error is the solver's diagnosis.
-    fn step(&mut self) -> Result<StepStats, StepError>;
+    fn step(&mut self) -> Result<StepStats, String>;
     fn time(&self) -> f64;
     fn time_step(&self) -> f64;
     fn end_time(&self) -> f64;
@@ -34,6 +35,11 @@ pub(crate) trait Model {
     fn energy(&self) -> EnergyRow;
     fn crack_tips(&mut self) -> Vec<CrackTipRow>;
     fn snapshot(&self, index: u32, fields: &[FieldKind]) -> Snapshot;
+    /// The snapshots of one snapshot time, indices from `index` (a 3D run writes one per
+    /// slice); by default the one [`Model::snapshot`].
+    fn snapshots(&self, index: u32, fields: &[FieldKind]) -> Vec<Snapshot> {
+        vec![self.snapshot(index, fields)]
+    }
     /// The fracture-energy report of growing tips (None without growth).
     fn fracture_energy(&self) -> Option<FractureEnergy> {
         None
@@ -45,8 +51,8 @@ pub(crate) trait Model {
 }
 
 impl Model for Simulation {
-    fn step(&mut self) -> Result<StepStats, StepError> {
-        Simulation::step(self)
+    fn step(&mut self) -> Result<StepStats, String> {
+        Simulation::step(self).map_err(|e: StepError| e.to_string())
     }
     fn time(&self) -> f64 {
         Simulation::time(self)
@@ -109,15 +115,22 @@ pub fn run_scene(scene: &ValidScene, opts: &RunOptions, sink: &mut dyn RunSink) 
     };
     let built = catch_unwind(AssertUnwindSafe(|| Simulation::new(scene, config)));
     match built {
-        Ok(Ok(mut sim)) => run_model(&mut sim, scene, opts, CheckpointPolicy::none(), None, sink),
+        Ok(Ok(mut sim)) => run_model(
+            &mut sim,
+            scene.scene(),
+            opts,
+            CheckpointPolicy::none(),
+            None,
+            sink,
+        ),
         Ok(Err(e)) => finish_early(
-            scene,
+            scene.scene(),
             sink,
             FailureKind::Output,
             format!("could not build the simulation: {e}"),
         ),
         Err(p) => finish_early(
-            scene,
+            scene.scene(),
             sink,
             FailureKind::Panic,
             format!(
@@ -146,7 +159,7 @@ pub fn run_job(
         };
         let built = catch_unwind(AssertUnwindSafe(|| Simulation::new(scene, config)));
         return Ok(match built {
-            Ok(Ok(mut sim)) => run_model(&mut sim, scene, opts, policy, None, sink),
+            Ok(Ok(mut sim)) => run_model(&mut sim, scene.scene(), opts, policy, None, sink),
             _ => run_scene(scene, opts, sink),
         });
     };
@@ -164,7 +177,7 @@ pub fn run_job(
     }
     Ok(run_model(
         &mut sim,
-        scene,
+        scene.scene(),
         opts,
         policy,
         Some(d.cursor),
@@ -172,7 +185,65 @@ pub fn run_job(
     ))
 }
 
-fn base_summary(scene: &Scene) -> Summary {
+/// What the run loop needs from a scene of either dimension.
+pub trait RunPlan {
+    /// The scene's hash.
+    fn hash(&self) -> String;
+    /// The sampling settings (a 3D scene's in the 2D form: cadences, fields, speed window).
+    fn output(&self) -> Output;
+    /// End time (s).
+    fn end_time(&self) -> f64;
+    /// Reference values the summary checks.
+    fn references(&self) -> &[Reference];
+    /// `Some(3)` for a 3D scene.
+    fn dimension(&self) -> Option<u32>;
+}
+
+impl RunPlan for Scene {
+    fn hash(&self) -> String {
+        Scene::hash(self)
+    }
+    fn output(&self) -> Output {
+        self.output.clone()
+    }
+    fn end_time(&self) -> f64 {
+        self.time.end
+    }
+    fn references(&self) -> &[Reference] {
+        &self.references
+    }
+    fn dimension(&self) -> Option<u32> {
+        None
+    }
+}
+
+impl RunPlan for Scene3 {
+    fn hash(&self) -> String {
+        Scene3::hash(self)
+    }
+    fn output(&self) -> Output {
+        let o = &self.output;
+        Output {
+            history_interval: o.history_interval,
+            snapshot_interval: o.snapshot_interval,
+            fields: o.fields.clone(),
+            fringe_constant: None,
+            speed_window: o.speed_window,
+            particles: o.particles,
+        }
+    }
+    fn end_time(&self) -> f64 {
+        self.time.end
+    }
+    fn references(&self) -> &[Reference] {
+        &[]
+    }
+    fn dimension(&self) -> Option<u32> {
+        Some(3)
+    }
+}
+
+fn base_summary<P: RunPlan + ?Sized>(scene: &P) -> Summary {
     Summary {
         status: RunStatus::Failed,
         message: None,
@@ -195,6 +266,7 @@ fn base_summary(scene: &Scene) -> Summary {
         )),
         tips: Vec::new(),
         references: Vec::new(),
+        dimension: scene.dimension(),
     }
 }
 
@@ -205,8 +277,18 @@ fn stamp_finish(summary: &mut Summary) {
     }
 }
 
-fn finish_early(
-    scene: &Scene,
+/// A run that could not start: a failed summary (kind `output`) with `message`, handed to
+/// the sink.
+pub(crate) fn finish_early_failed<P: RunPlan + ?Sized>(
+    scene: &P,
+    sink: &mut dyn RunSink,
+    message: String,
+) -> Summary {
+    finish_early(scene, sink, FailureKind::Output, message)
+}
+
+fn finish_early<P: RunPlan + ?Sized>(
+    scene: &P,
     sink: &mut dyn RunSink,
     failure: FailureKind,
     message: String,
@@ -235,7 +317,7 @@ pub(crate) fn panic_message(p: &(dyn Any + Send)) -> String {
 enum Stop {
     Cancelled,
     HandedBack,
-    Step(StepError),
+    Step(String),
     Panic(String),
     Sink(SinkError),
 }
@@ -313,15 +395,18 @@ impl<M: Model> Loop<'_, M> {
         let model = &*self.model;
         let index = self.snapshots;
         let fields = &self.fields;
-        let snap =
-            catch_unwind(AssertUnwindSafe(|| model.snapshot(index, fields))).map_err(|p| {
+        let snaps =
+            catch_unwind(AssertUnwindSafe(|| model.snapshots(index, fields))).map_err(|p| {
                 Stop::Panic(format!(
                     "solver panicked while taking snapshot {index}: {}",
                     panic_message(&*p)
                 ))
             })?;
-        self.snapshots += 1;
-        self.sink.snapshot(&snap).map_err(Stop::Sink)
+        for snap in &snaps {
+            self.snapshots += 1;
+            self.sink.snapshot(snap).map_err(Stop::Sink)?;
+        }
+        Ok(())
     }
 
     fn flush(&mut self) -> Result<(), SinkError> {
@@ -391,9 +476,9 @@ impl<M: Model> Loop<'_, M> {
 }
 
 /// The loop proper, for any [`Model`].
-pub(crate) fn run_model<M: Model>(
+pub(crate) fn run_model<M: Model, P: RunPlan + ?Sized>(
     model: &mut M,
-    scene: &Scene,
+    scene: &P,
     opts: &RunOptions,
     policy: CheckpointPolicy,
     resume: Option<LoopCursor>,
@@ -405,7 +490,7 @@ pub(crate) fn run_model<M: Model>(
     summary.grid_nodes = model.grid_node_count() as u64;
     summary.threads = u32::try_from(model.threads()).unwrap_or(u32::MAX);
 
-    let out = &scene.output;
+    let out = &scene.output();
     let mut history = Cadence::new(out.history_interval);
     let snapshot_interval = (out.snapshot_interval > 0.0).then_some(out.snapshot_interval);
     let mut snapshots = Cadence::new(snapshot_interval);
@@ -416,7 +501,7 @@ pub(crate) fn run_model<M: Model>(
         fields: out.fields.clone(),
         energy: Vec::new(),
         tips: Vec::new(),
-        summarizer: TipSummaryBuilder::new(scene),
+        summarizer: TipSummaryBuilder::with(out.speed_window, scene.end_time()),
         snapshots: 0,
         sampled_at: None,
     };
@@ -534,7 +619,7 @@ pub(crate) fn run_model<M: Model>(
     summary.sim_time = lp.model.time();
     summary.fracture = lp.model.fracture_energy();
     summary.tips = lp.summarizer.finish();
-    summary.references = check_references(&scene.references, &summary.tips);
+    summary.references = check_references(scene.references(), &summary.tips);
     summary.wall_seconds = wall;
     summary.particle_steps_per_second = if wall > 0.0 {
         summary.particles as f64 * active_steps as f64 / wall
@@ -637,7 +722,7 @@ mod tests {
     }
 
     impl Model for Fake {
-        fn step(&mut self) -> Result<StepStats, StepError> {
+        fn step(&mut self) -> Result<StepStats, String> {
             let next = self.taken + 1;
             if self.panic_at == Some(next) {
                 panic!("index out of bounds in step {next}");
@@ -650,7 +735,8 @@ mod tests {
                     quantity: "velocity",
                     x: 0.0,
                     y: 0.0,
-                });
+                }
+                .to_string());
             }
             Ok(StepStats {
                 grew: false,
@@ -712,6 +798,7 @@ mod tests {
                 }],
                 cracks: Vec::new(),
                 particles: None,
+                slice: None,
             }
         }
     }

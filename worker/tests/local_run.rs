@@ -96,6 +96,7 @@ fn local_output_writes_the_run_output_files() {
         }],
         cracks: vec![],
         particles: None,
+        slice: None,
     })
     .unwrap();
     // Flushed as it goes: readable before finish.
@@ -120,6 +121,7 @@ fn local_output_writes_the_run_output_files() {
         provenance: None,
         tips: Vec::new(),
         references: Vec::new(),
+        dimension: None,
     };
     sink.finish(&summary).unwrap();
 

@@ -45,6 +45,7 @@ fn snapshot(index: u32, time: f64) -> Snapshot {
         ],
         cracks: vec![vec![[0.01, 0.02], [0.015, 0.02 + 1e-4 * index as f64]]],
         particles: None,
+        slice: None,
     }
 }
 

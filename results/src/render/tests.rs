@@ -20,6 +20,7 @@ fn snapshot(nx: u32, ny: u32, h: f64, comps: Vec<(&str, Vec<f32>)>) -> Snapshot 
             .collect(),
         cracks: vec![],
         particles: None,
+        slice: None,
     }
 }
 

@@ -259,6 +259,7 @@ impl Simulation {
             components,
             cracks: self.cracks.as_ref().map(|c| c.lines()).unwrap_or_default(),
             particles: cloud,
+            slice: None,
         }
     }
 }
