@@ -1,12 +1,12 @@
 //! Time the core's step on a block: `cargo run --release -p fracture-mpm --example block --
-//! 3 50 2 20` (dimension, cells per side, threads, steps). Prints particle-steps/s and the
+//! 3 50 2 20 [fma]` (dimension, cells per side, threads, steps, the FMA kernel). Prints particle-steps/s and the
 //! per-pass shares.
 
 use fracture_api::scene::{Analysis, Damping, Material, ShapeFunction};
 use fracture_mpm::particles::Particles;
 use fracture_mpm::{Dim, Dim2, Dim3, Elastic, Simulation, Spec};
 
-fn run<D: Dim>(cells: usize, threads: usize, steps: usize) {
+fn run<D: Dim>(cells: usize, threads: usize, steps: usize, fma: bool) {
     let m = Elastic::new(
         &Material::LinearElastic {
             density: 7800.0,
@@ -51,6 +51,9 @@ fn run<D: Dim>(cells: usize, threads: usize, steps: usize) {
         s.add_particle(x, D::V::default(), vol, 2, 0, 0, 0);
     }
     let mut sim = Simulation::new(s).expect("build");
+    if fma {
+        sim.set_kernel(fracture_mpm::Kernel::Fma);
+    }
     sim.set_velocities(|x| {
         let mut v = D::V::default();
         v.as_mut()[0] = (x.as_ref()[0] * 200.0).sin();
@@ -89,9 +92,10 @@ fn main() {
         a.get(2).copied().unwrap_or(2),
         a.get(3).copied().unwrap_or(20),
     );
+    let fma = std::env::args().any(|a| a == "fma");
     if dim == 2 {
-        run::<Dim2>(cells, threads, steps);
+        run::<Dim2>(cells, threads, steps, fma);
     } else {
-        run::<Dim3>(cells, threads, steps);
+        run::<Dim3>(cells, threads, steps, fma);
     }
 }

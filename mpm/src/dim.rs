@@ -110,11 +110,19 @@ pub trait Dim: Copy + Clone + Debug + Default + PartialEq + Send + Sync + 'stati
     /// σ·g for a gradient g (the nodal force is −V σ·∇S).
     fn stress_dot<A: Arith>(s: &Self::S, g: &[f64]) -> Self::V;
 
-    /// Visit the stencil of weights `w`: `f(k, S, ∇S)` with k the node's offset in storage
-    /// from the stencil's first node (`strides`: storage strides of the directions, the last
-    /// 1), ∇S in cell units. Order: x outer, then y, then z (the 2D solver's order). Skips
-    /// the directions' empty nodes (S = S' = 0) and, with `weighted`, every pair with S = 0.
-    fn visit(w: &Self::W, strides: &Self::U, weighted: bool, f: impl FnMut(usize, f64, Self::V));
+    /// Visit the stencil of weights `w` whose first node is `nodes[0]` (`strides`: storage
+    /// strides of the directions, the last 1): `f(S, ∇S, node)`, ∇S in cell units. Order: x
+    /// outer, then y, then z (the 2D solver's order). A direction's last node is skipped
+    /// where it is empty (S = S' = 0: GIMP and linear weights put an empty node last); with
+    /// `weighted`, every pair with S = 0 too. Visiting a pair of zero weights would only add
+    /// signed zeros to sums that start at +0, so the skips change no bits.
+    fn visit<N>(
+        w: &Self::W,
+        strides: &Self::U,
+        weighted: bool,
+        nodes: &mut [N],
+        f: impl FnMut(f64, Self::V, &mut N),
+    );
 
     /// The strain energy density-free check that a stress is finite.
     fn stress_finite(s: &Self::S) -> bool {
@@ -150,6 +158,24 @@ pub fn unpack<D: Dim>(c: &D::C) -> D::W {
         *wk = ck.unpack();
     }
     w
+}
+
+/// Nodes of one direction to visit: 2 when the last is empty (S = S' = 0), else 3.
+#[inline(always)]
+fn extent(w: &Weights1) -> usize {
+    if w.s[2] == 0.0 && w.ds[2] == 0.0 {
+        2
+    } else {
+        3
+    }
+}
+
+/// The three nodes of a stencil row starting at `at` (one range check for the row).
+#[inline(always)]
+fn row3<N>(nodes: &mut [N], at: usize) -> &mut [N; 3] {
+    nodes[at..]
+        .first_chunk_mut::<3>()
+        .expect("stencil row inside the strip's grid")
 }
 
 /// Two dimensions (the plane states of `Analysis`).
@@ -196,24 +222,29 @@ impl Dim for Dim2 {
     }
 
     #[inline(always)]
-    fn visit(
+    fn visit<N>(
         w: &[Weights1; 2],
         strides: &[usize; 2],
         weighted: bool,
-        mut f: impl FnMut(usize, f64, [f64; 2]),
+        nodes: &mut [N],
+        mut f: impl FnMut(f64, [f64; 2], &mut N),
     ) {
         let [x, y] = w;
+        let (xl, yl) = (extent(x) == 3, extent(y) == 3);
         for a in 0..3 {
-            if x.s[a] == 0.0 && x.ds[a] == 0.0 {
-                continue;
+            if a == 2 && !xl {
+                break;
             }
-            let col = a * strides[0];
+            let col = row3(nodes, a * strides[0]);
             for b in 0..3 {
+                if b == 2 && !yl {
+                    break;
+                }
                 let s = x.s[a] * y.s[b];
                 if weighted && s == 0.0 {
                     continue;
                 }
-                f(col + b, s, [x.ds[a] * y.s[b], x.s[a] * y.ds[b]]);
+                f(s, [x.ds[a] * y.s[b], x.s[a] * y.ds[b]], &mut col[b]);
             }
         }
     }
@@ -267,33 +298,26 @@ impl Dim for Dim3 {
     }
 
     #[inline(always)]
-    fn visit(
+    fn visit<N>(
         w: &[Weights1; 3],
         strides: &[usize; 3],
         weighted: bool,
-        mut f: impl FnMut(usize, f64, [f64; 3]),
+        nodes: &mut [N],
+        mut f: impl FnMut(f64, [f64; 3], &mut N),
     ) {
         let [x, y, z] = w;
-        for a in 0..3 {
-            if x.s[a] == 0.0 && x.ds[a] == 0.0 {
-                continue;
-            }
-            for b in 0..3 {
-                if y.s[b] == 0.0 && y.ds[b] == 0.0 {
-                    continue;
-                }
-                let row = a * strides[0] + b * strides[1];
+        let (na, nb, nc) = (extent(x), extent(y), extent(z));
+        for a in 0..na {
+            for b in 0..nb {
+                let row = row3(nodes, a * strides[0] + b * strides[1]);
                 let sxy = x.s[a] * y.s[b];
                 let (gx, gy) = (x.ds[a] * y.s[b], x.s[a] * y.ds[b]);
-                for c in 0..3 {
-                    if z.s[c] == 0.0 && z.ds[c] == 0.0 {
-                        continue;
-                    }
+                for c in 0..nc {
                     let s = sxy * z.s[c];
                     if weighted && s == 0.0 {
                         continue;
                     }
-                    f(row + c, s, [gx * z.s[c], gy * z.s[c], sxy * z.ds[c]]);
+                    f(s, [gx * z.s[c], gy * z.s[c], sxy * z.ds[c]], &mut row[c]);
                 }
             }
         }
@@ -355,7 +379,8 @@ mod tests {
         ];
         let (mut s, mut g) = (0.0, [0.0; 3]);
         let mut n = 0;
-        Dim3::visit(&w, &[100, 10, 1], false, |_, sk, gk| {
+        let mut nodes = vec![0u8; 300];
+        Dim3::visit(&w, &[100, 10, 1], false, &mut nodes, |sk, gk, _| {
             s += sk;
             for c in 0..3 {
                 g[c] += gk[c];

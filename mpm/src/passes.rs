@@ -91,14 +91,11 @@ fn each<D: Dim>(
     geom: &GridGeom<D>,
     c: &D::C,
     weighted: bool,
-    mut f: impl FnMut(f64, D::V, &mut crate::grid::Node<D>),
+    f: impl FnMut(f64, D::V, &mut crate::grid::Node<D>),
 ) {
     let w = unpack::<D>(c);
     let start = geom.index_i32(|d| w.as_ref()[d].base) - g.base;
-    let nodes = &mut *g.nodes;
-    D::visit(&w, &geom.strides, weighted, |k, s, gr| {
-        f(s, gr, &mut nodes[start + k])
-    });
+    D::visit(&w, &geom.strides, weighted, &mut g.nodes[start..], f);
 }
 
 /// L = Σ v ⊗ ∇S over the stencil (cell units), from the nodal velocities.
