@@ -492,6 +492,44 @@ pub struct Snapshot {
     pub slice: Option<SnapshotSlice>,
 }
 
+/// (extension) A 3D run's fields on its whole grid at one time (the `--vtk` volumes of
+/// `three-d.md`): mass-weighted averages of particle values at every node, as a
+/// [`Snapshot`] samples a plane.
+#[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
+pub struct Volume {
+    /// Index of the snapshot time in its run (0, 1, …).
+    pub index: u32,
+    /// Simulated time (s).
+    pub time: f64,
+    /// Nodes per direction.
+    pub n: [u32; 3],
+    /// Position of node (0, 0, 0) (m).
+    pub origin: [f64; 3],
+    /// Node spacing (m).
+    pub cell_size: f64,
+    /// Field kinds recorded.
+    pub fields: Vec<String>,
+    /// The components, values at the nodes with x fastest: index = (iz·ny + iy)·nx + ix
+    /// (VTK's order); NaN where no material touches the node.
+    pub components: Vec<FieldComponent>,
+    /// The particles, when the scene records them (`output.particles`).
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    pub particles: Option<ParticleCloud>,
+}
+
+/// (extension) The particles of a [`Volume`]: positions and the same components per particle.
+#[derive(Debug, Clone, PartialEq, Default, Serialize, Deserialize, JsonSchema)]
+pub struct ParticleCloud {
+    /// Positions x (m).
+    pub x: Vec<f32>,
+    /// Positions y (m).
+    pub y: Vec<f32>,
+    /// Positions z (m).
+    pub z: Vec<f32>,
+    /// The components, one value per particle.
+    pub components: Vec<FieldComponent>,
+}
+
 /// (extension) The plane of a 3D run that a [`Snapshot`] samples.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 pub struct SnapshotSlice {

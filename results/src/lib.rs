@@ -15,3 +15,4 @@ pub mod mcapfile;
 pub mod path;
 pub mod render;
 pub mod vtk;
+pub mod vtk3;

@@ -12,7 +12,9 @@
 use std::sync::Arc;
 
 use fracture_api::ValidScene3;
-use fracture_api::results::{EnergyRow, FieldComponent, ParticleSnapshot, Snapshot, SnapshotSlice};
+use fracture_api::results::{
+    EnergyRow, FieldComponent, ParticleCloud, ParticleSnapshot, Snapshot, SnapshotSlice, Volume,
+};
 use fracture_api::scene::{Analysis, FieldKind};
 use fracture_api::scene3::{Axis, Region3, Scene3, Slice};
 use fracture_mpm::particles::Particles;
@@ -225,6 +227,110 @@ impl Simulation3 {
             .enumerate()
             .map(|(k, s)| self.slice_snapshot(first + k as u32, *s, fields))
             .collect()
+    }
+
+    /// The fields on the whole grid (the `--vtk` volumes): mass-weighted averages of particle
+    /// values at every node, x fastest; with the particles when the scene records them.
+    pub fn volume(&self, index: u32, fields: &[FieldKind]) -> Volume {
+        let g = *self.sim.grid();
+        let [nx, ny, nz] = g.n;
+        let names = component_names(fields);
+        let nc = names.len();
+        let nn = nx * ny * nz;
+        let mut mass = vec![0.0f64; nn];
+        let mut acc = vec![0.0f64; nn * nc];
+        let p = self.sim.particles();
+        let mats = &self.sim.model.mats;
+        let mut vals = vec![0.0f64; nc];
+        let mut cloud = self.scene.output.particles.then(|| ParticleCloud {
+            x: Vec::with_capacity(p.len()),
+            y: Vec::with_capacity(p.len()),
+            z: Vec::with_capacity(p.len()),
+            components: names
+                .iter()
+                .map(|n| FieldComponent {
+                    name: (*n).to_string(),
+                    values: Vec::with_capacity(p.len()),
+                })
+                .collect(),
+        });
+        for i in 0..p.len() {
+            let k = p.kin[i];
+            let lh = p.mech[i].lh;
+            let m = &mats[p.mech[i].mat as usize];
+            particle_values(
+                &names,
+                &k.x,
+                &k.v,
+                &p.cold[i].x0,
+                &p.stress[i],
+                m,
+                p.mech[i].mat,
+                &mut vals,
+            );
+            if let Some(c) = cloud.as_mut() {
+                c.x.push(k.x[0] as f32);
+                c.y.push(k.x[1] as f32);
+                c.z.push(k.x[2] as f32);
+                for (comp, v) in c.components.iter_mut().zip(&vals) {
+                    comp.values.push(*v as f32);
+                }
+            }
+            let w = fracture_mpm::dim::weights::<Dim3>(
+                self.sim.model.shape,
+                &g.xi(&k.x),
+                lh,
+                0.25 / lh,
+            );
+            for a in 0..3 {
+                for b in 0..3 {
+                    for c in 0..3 {
+                        let sh = w[0].s[a] * w[1].s[b] * w[2].s[c];
+                        if sh == 0.0 {
+                            continue;
+                        }
+                        let ix = (w[0].base + a as i32) as usize;
+                        let iy = (w[1].base + b as i32) as usize;
+                        let iz = (w[2].base + c as i32) as usize;
+                        if ix >= nx || iy >= ny || iz >= nz {
+                            continue;
+                        }
+                        let n = (iz * ny + iy) * nx + ix;
+                        let sm = sh * p.mech[i].m;
+                        mass[n] += sm;
+                        for q in 0..nc {
+                            acc[n * nc + q] += sm * vals[q];
+                        }
+                    }
+                }
+            }
+        }
+        let components = names
+            .iter()
+            .enumerate()
+            .map(|(q, name)| FieldComponent {
+                name: (*name).to_string(),
+                values: (0..nn)
+                    .map(|n| {
+                        if mass[n] > self.m_snapshot {
+                            (acc[n * nc + q] / mass[n]) as f32
+                        } else {
+                            f32::NAN
+                        }
+                    })
+                    .collect(),
+            })
+            .collect();
+        Volume {
+            index,
+            time: self.sim.time(),
+            n: [nx as u32, ny as u32, nz as u32],
+            origin: g.origin,
+            cell_size: g.h,
+            fields: fields.iter().map(|f| f.name().to_string()).collect(),
+            components,
+            particles: cloud,
+        }
     }
 
     fn slice_snapshot(&self, index: u32, slice: Slice, fields: &[FieldKind]) -> Snapshot {

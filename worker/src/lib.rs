@@ -36,7 +36,7 @@ pub use run3::{run_job3, run_scene3};
 
 use std::time::Duration;
 
-use fracture_api::results::{CrackTipRow, EnergyRow, Progress, Snapshot, Summary};
+use fracture_api::results::{CrackTipRow, EnergyRow, Progress, Snapshot, Summary, Volume};
 
 /// What the sink wants the run to do next.
 #[derive(Debug, Clone, Copy, PartialEq, Eq)]
@@ -89,6 +89,17 @@ pub trait RunSink {
     /// logged and the run goes on (the previous checkpoint stays the one to resume from).
     fn checkpoint(&mut self, bytes: &[u8], at: &CheckpointAt) -> Result<(), SinkError> {
         let _ = (bytes, at);
+        Ok(())
+    }
+    /// Whether the sink takes whole-grid volumes of 3D runs ([`RunSink::volume`]): they
+    /// cost a pass over the particles and a grid of values, so the loop only makes them
+    /// when asked (`fracture run --vtk` of a 3D scene).
+    fn wants_volumes(&self) -> bool {
+        false
+    }
+    /// A 3D run's fields on its whole grid at a snapshot time (after that time's slices).
+    fn volume(&mut self, volume: &Volume) -> Result<(), SinkError> {
+        let _ = volume;
         Ok(())
     }
 }

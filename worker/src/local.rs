@@ -12,6 +12,7 @@ use std::path::{Path, PathBuf};
 use fracture_api::Scene;
 use fracture_api::results::{
     CRACK_TIPS_CSV_HEADER, CrackTipRow, ENERGY_CSV_HEADER, EnergyRow, Progress, Snapshot, Summary,
+    Volume,
 };
 
 use crate::{Control, RunSink, SinkError};
@@ -79,6 +80,15 @@ pub struct LocalOutput {
     scene: Option<Scene>,
     /// Every tip's path, for `path.svg`.
     paths: PathRecorder,
+    /// A 3D run's VTK volumes, when asked for ([`LocalOutput::write_volumes`]).
+    volumes: Option<VolumeSeries>,
+}
+
+/// Where a 3D run's VTK volumes go and what was written.
+struct VolumeSeries {
+    dir: PathBuf,
+    volumes: Vec<(f64, String)>,
+    particles: Vec<(f64, String)>,
 }
 
 impl LocalOutput {
@@ -121,6 +131,7 @@ impl LocalOutput {
             finished: false,
             scene: None,
             paths: PathRecorder::new(),
+            volumes: None,
         })
     }
 
@@ -138,6 +149,23 @@ impl LocalOutput {
         self.mcap
             .write_scene_parts(&scene.name, &scene.hash(), &scene.canonical_json())
             .map_err(|source| self.mcap_error(source))
+    }
+
+    /// Write a 3D run's fields on its whole grid as VTK files into `dir` (created): one
+    /// `volume_NNNNN.vti` per snapshot time, `particles_NNNNN.vtu` when the scene records
+    /// particles, and at the end `volumes.pvd` and `particles.pvd` (`three-d.md`, `--vtk`).
+    pub fn write_volumes(&mut self, dir: impl AsRef<Path>) -> Result<(), LocalOutputError> {
+        let dir = dir.as_ref().to_path_buf();
+        std::fs::create_dir_all(&dir).map_err(|source| LocalOutputError::Io {
+            path: dir.clone(),
+            source,
+        })?;
+        self.volumes = Some(VolumeSeries {
+            dir,
+            volumes: Vec::new(),
+            particles: Vec::new(),
+        });
+        Ok(())
     }
 
     /// The run directory.
@@ -212,11 +240,54 @@ impl RunSink for LocalOutput {
         Ok(())
     }
 
+    fn wants_volumes(&self) -> bool {
+        self.volumes.is_some()
+    }
+
+    fn volume(&mut self, volume: &Volume) -> Result<(), SinkError> {
+        let Some(series) = self.volumes.as_mut() else {
+            return Ok(());
+        };
+        let k = series.volumes.len();
+        let files = fracture_results::vtk3::volume_files(volume, k)
+            .map_err(|e| SinkError(format!("VTK volume {k}: {e}")))?;
+        for (name, bytes) in files {
+            let path = series.dir.join(&name);
+            std::fs::write(&path, bytes)
+                .map_err(|e| SinkError(format!("writing {}: {e}", path.display())))?;
+            if name.ends_with(".vti") {
+                series.volumes.push((volume.time, name));
+            } else {
+                series.particles.push((volume.time, name));
+            }
+        }
+        Ok(())
+    }
+
     fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
         if self.finished {
             return Ok(());
         }
         self.finished = true;
+        let volumes = match &self.volumes {
+            Some(series) => {
+                let mut r = Ok(());
+                for (name, entries) in [
+                    ("volumes.pvd", &series.volumes),
+                    ("particles.pvd", &series.particles),
+                ] {
+                    if entries.is_empty() {
+                        continue;
+                    }
+                    let path = series.dir.join(name);
+                    if let Err(e) = std::fs::write(&path, fracture_results::vtk::pvd(entries)) {
+                        r = Err(SinkError(format!("writing {}: {e}", path.display())));
+                    }
+                }
+                r
+            }
+            None => Ok(()),
+        };
         // Finish every file even if one fails; report the first failure.
         let energy = self
             .energy
@@ -236,6 +307,7 @@ impl RunSink for LocalOutput {
             _ => Ok(()),
         };
         let summary = self.write_summary(summary);
+        volumes?;
         path?;
         energy?;
         tips?;

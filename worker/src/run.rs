@@ -9,6 +9,7 @@ use std::time::Instant;
 
 use fracture_api::results::{
     CrackTipRow, EnergyRow, FailureKind, FractureEnergy, Progress, RunStatus, Snapshot, Summary,
+    Volume,
 };
 use fracture_api::scene::{FieldKind, Output, Reference};
 use fracture_api::scene3::Scene3;
@@ -39,6 +40,10 @@ pub trait Model {
     /// slice); by default the one [`Model::snapshot`].
     fn snapshots(&self, index: u32, fields: &[FieldKind]) -> Vec<Snapshot> {
         vec![self.snapshot(index, fields)]
+    }
+    /// The fields on the whole grid at this snapshot time (3D runs; None for 2D).
+    fn volume(&self, _index: u32, _fields: &[FieldKind]) -> Option<Volume> {
+        None
     }
     /// The fracture-energy report of growing tips (None without growth).
     fn fracture_energy(&self) -> Option<FractureEnergy> {
@@ -405,6 +410,18 @@ impl<M: Model> Loop<'_, M> {
         for snap in &snaps {
             self.snapshots += 1;
             self.sink.snapshot(snap).map_err(Stop::Sink)?;
+        }
+        if self.sink.wants_volumes() {
+            let volume =
+                catch_unwind(AssertUnwindSafe(|| model.volume(index, fields))).map_err(|p| {
+                    Stop::Panic(format!(
+                        "solver panicked while taking volume {index}: {}",
+                        panic_message(&*p)
+                    ))
+                })?;
+            if let Some(v) = volume {
+                self.sink.volume(&v).map_err(Stop::Sink)?;
+            }
         }
         Ok(())
     }

@@ -5,7 +5,7 @@
 use std::panic::{AssertUnwindSafe, catch_unwind};
 
 use fracture_api::ValidScene3;
-use fracture_api::results::{CrackTipRow, EnergyRow, Snapshot, Summary};
+use fracture_api::results::{CrackTipRow, EnergyRow, Snapshot, Summary, Volume};
 use fracture_api::scene::FieldKind;
 use fracture_solver::StepStats;
 use fracture_solver3d::Simulation3;
@@ -63,6 +63,9 @@ impl Model for Simulation3 {
     }
     fn checkpoint(&self) -> Option<Vec<u8>> {
         Some(Simulation3::checkpoint(self))
+    }
+    fn volume(&self, index: u32, fields: &[FieldKind]) -> Option<Volume> {
+        Some(Simulation3::volume(self, index, fields))
     }
 }
 
