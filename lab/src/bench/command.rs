@@ -80,9 +80,18 @@ pub struct BenchArgs {
     /// `ab`: the baseline `fracture` binary (built from the stated baseline commit).
     #[arg(long)]
     pub baseline: Option<std::path::PathBuf>,
-    /// `ab`: interleaved pairs (baseline, this binary).
+    /// `ab`: interleaved pairs (baseline, this binary); `throughput3d`: interleaved
+    /// repetitions of each case.
     #[arg(long, default_value_t = 7)]
     pub pairs: usize,
+    /// The single throughput run: `2` (the seed block) or `3` (the 3D block of
+    /// `throughput3d`, `--cells` per side).
+    #[arg(long, default_value_t = 2)]
+    pub dim: u32,
+    /// Cells per side of the 3D block (`--dim 3`, `throughput3d`): 50 with the default two
+    /// particles per cell direction gives 1,000,000 particles.
+    #[arg(long, default_value_t = 50)]
+    pub cells: usize,
 }
 
 impl BenchArgs {
@@ -109,6 +118,8 @@ impl BenchArgs {
             instructions: false,
             baseline: None,
             pairs: 1,
+            dim: 2,
+            cells: 50,
         }
     }
 }
@@ -188,6 +199,11 @@ pub enum BenchKind {
     /// against a baseline binary (`--baseline`), `--pairs` pairs: medians, ratio of the
     /// medians and median of the pair ratios.
     Ab,
+    /// The 3D block (Homalite, `--cells` per side, struck at 20 m/s on part of a face) on
+    /// the dimension-generic core against the 2D solver's seed block, interleaved, on each
+    /// of --thread-counts: particle-steps/s, the bytes model and (with --instructions)
+    /// instructions per particle-step.
+    Throughput3d,
     /// All three, into `<out>/throughput`, `<out>/skip` and `<out>/accuracy` (default
     /// `out/bench`): the one command that regenerates every figure of `docs/performance.md`
     /// and `docs/accuracy.md`.
@@ -251,6 +267,9 @@ struct Throughput {
 }
 
 fn throughput(a: &BenchArgs) -> anyhow::Result<Result<Throughput, String>> {
+    if a.dim == 3 {
+        return throughput_3d(a);
+    }
     let case = a.case.case();
     let scene = crate::bench::throughput::case_scene(
         case,
@@ -307,6 +326,44 @@ fn throughput(a: &BenchArgs) -> anyhow::Result<Result<Throughput, String>> {
         },
         particle_steps_per_second: rate(particles as f64 * a.steps as f64),
         kernel: sim.kernel().name(),
+        solver_version: fracture_api::SOLVER_VERSION,
+    }))
+}
+
+/// The single run of the 3D block (`--dim 3`).
+fn throughput_3d(a: &BenchArgs) -> anyhow::Result<Result<Throughput, String>> {
+    let threads = a.threads.resolve();
+    let kernel = crate::bench::block3d::core_kernel(a.kernel.kernel()?);
+    let r = crate::bench::block3d::time_block(
+        a.cells,
+        a.particles_per_cell,
+        threads,
+        a.warmup,
+        a.steps,
+        kernel,
+    )?;
+    let r = match r {
+        Ok(r) => r,
+        Err(e) => return Ok(Err(e)),
+    };
+    Ok(Ok(Throughput {
+        benchmark: "throughput",
+        case: "3d block",
+        particles: r.particles,
+        grid_nodes: r.grid_nodes,
+        cell_size: crate::bench::block3d::CELL,
+        particles_per_cell: a.particles_per_cell,
+        threads,
+        warmup_steps: a.warmup,
+        steps: a.steps,
+        wall_seconds: r.wall_seconds,
+        seconds_per_step: if a.steps > 0 {
+            r.wall_seconds / a.steps as f64
+        } else {
+            0.0
+        },
+        particle_steps_per_second: r.particle_steps_per_second,
+        kernel: r.kernel,
         solver_version: fracture_api::SOLVER_VERSION,
     }))
 }
@@ -379,6 +436,7 @@ fn bench_kind(kind: BenchKind, a: &BenchArgs) -> ExitCode {
             .try_for_each(|k| {
                 let name = match k {
                     BenchKind::Throughput => "throughput",
+                    BenchKind::Throughput3d => "throughput3d",
                     BenchKind::Ab => "ab",
                     BenchKind::Skip => "skip",
                     _ => "accuracy",
@@ -453,6 +511,7 @@ fn bench_one(
             out.as_deref(),
         )
         .map(|_| ()),
+        BenchKind::Throughput3d => super::block3d::run(a, out.as_deref()).map(|_| ()),
         BenchKind::All => anyhow::bail!("bench all runs the others"),
     }
 }

@@ -8,6 +8,7 @@
 pub mod ab;
 pub mod accuracy;
 pub mod accuracy_plot;
+pub mod block3d;
 pub mod command;
 pub mod skip;
 pub mod throughput;
