@@ -22,6 +22,14 @@ pub trait Backend<D: Dim>: Send {
     fn update(&mut self, model: &Model<D>, state: &mut State<D>, scratch: &mut Scratch<D>) -> Acc;
     /// Pass 4. Reads weights, mech, nodal velocities; writes stress and strain energy density.
     fn strain(&mut self, model: &Model<D>, state: &mut State<D>, scratch: &mut Scratch<D>) -> Acc;
+    /// Pass 4 fused with the next step's pass 1 into the spare grid (`Scratch::nodes_alt`):
+    /// pass 4's reads and writes plus pass 1's. Returns both reductions.
+    fn strain_p2g(
+        &mut self,
+        model: &Model<D>,
+        state: &mut State<D>,
+        scratch: &mut Scratch<D>,
+    ) -> (Acc, Acc);
 }
 
 /// The host backend: rayon over strips, bitwise independent of the thread count.
@@ -43,5 +51,13 @@ impl<D: Dim> Backend<D> for Cpu {
     }
     fn strain(&mut self, model: &Model<D>, state: &mut State<D>, scratch: &mut Scratch<D>) -> Acc {
         passes::strain(model, state, scratch)
+    }
+    fn strain_p2g(
+        &mut self,
+        model: &Model<D>,
+        state: &mut State<D>,
+        scratch: &mut Scratch<D>,
+    ) -> (Acc, Acc) {
+        passes::strain_p2g(model, state, scratch)
     }
 }

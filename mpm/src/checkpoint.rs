@@ -134,6 +134,8 @@ impl<D: Dim> Simulation<D> {
         }
         st.parts.wts = std::mem::take(&mut self.state.parts.wts);
         self.state = st;
+        // The next step does its own P2G (a fresh simulation has none done ahead anyway).
+        self.scratch.prefetched = None;
         Ok(())
     }
 }

@@ -178,6 +178,34 @@ impl<'a, D: Dim> GridMut<'a, D> {
     }
 }
 
+/// Grid storage that the strip traversal splits at storage indices: one grid, or two of the
+/// same layout split together (the fused last pass reads the current grid and scatters the
+/// next step's P2G into the spare one).
+pub trait SplitGrid: Send + Sized {
+    /// Split at storage index `at` (absolute).
+    fn split_grid(self, at: usize) -> (Self, Self);
+}
+
+impl<D: Dim> SplitGrid for GridMut<'_, D> {
+    fn split_grid(self, at: usize) -> (Self, Self) {
+        self.split_at(at)
+    }
+}
+
+impl<D: Dim> SplitGrid for (GridMut<'_, D>, GridMut<'_, D>) {
+    fn split_grid(self, at: usize) -> (Self, Self) {
+        let (a0, a1) = self.0.split_at(at);
+        let (b0, b1) = self.1.split_at(at);
+        ((a0, b0), (a1, b1))
+    }
+}
+
+impl<A: Reduce, B: Reduce> Reduce for (A, B) {
+    fn merge(self, r: Self) -> Self {
+        (self.0.merge(r.0), self.1.merge(r.1))
+    }
+}
+
 /// Something combined across strips in a fixed order (deterministic reductions).
 pub trait Reduce: Default + Send {
     /// Combine the result of a left (earlier) range with a right (later) one.
@@ -194,30 +222,31 @@ pub trait SplitParts: Send + Sized {
 /// views of its particles and of the grid planes it may write. `bounds[s]..bounds[s+1]` is
 /// the particle range of strip `s`. Results are merged in strip order (the same binary tree
 /// as the 2D solver's, so sums are bitwise the same).
-pub fn for_strips<D, P, R, F>(
+pub fn for_strips<D, P, G, R, F>(
     geom: &GridGeom<D>,
     bounds: &[usize],
     colour: usize,
     parts: P,
-    grid: GridMut<'_, D>,
+    grid: G,
     f: &F,
 ) -> R
 where
     D: Dim,
     P: SplitParts,
+    G: SplitGrid,
     R: Reduce,
-    F: Fn(usize, P, GridMut<'_, D>) -> R + Sync,
+    F: Fn(usize, P, G) -> R + Sync,
 {
     let n = geom.strips.saturating_sub(colour).div_ceil(2);
     if n == 0 {
         return R::default();
     }
-    let (_, grid) = grid.split_at(colour * STRIP * geom.plane());
+    let (_, grid) = grid.split_grid(colour * STRIP * geom.plane());
     recurse(geom, bounds, colour, 0, n, parts, 0, grid, f)
 }
 
 #[allow(clippy::too_many_arguments)]
-fn recurse<D, P, R, F>(
+fn recurse<D, P, G, R, F>(
     geom: &GridGeom<D>,
     bounds: &[usize],
     colour: usize,
@@ -225,14 +254,15 @@ fn recurse<D, P, R, F>(
     k1: usize,
     parts: P,
     pbase: usize,
-    grid: GridMut<'_, D>,
+    grid: G,
     f: &F,
 ) -> R
 where
     D: Dim,
     P: SplitParts,
+    G: SplitGrid,
     R: Reduce,
-    F: Fn(usize, P, GridMut<'_, D>) -> R + Sync,
+    F: Fn(usize, P, G) -> R + Sync,
 {
     let plane = geom.plane();
     if k1 - k0 == 1 {
@@ -240,14 +270,14 @@ where
         let (_, rest) = parts.split_at(bounds[s] - pbase);
         let (mine, _) = rest.split_at(bounds[s + 1] - bounds[s]);
         let end = (colour * STRIP + 2 * (k0 + 1) * STRIP) * plane;
-        let (chunk, _) = grid.split_at(end);
+        let (chunk, _) = grid.split_grid(end);
         return f(s, mine, chunk);
     }
     let mid = (k0 + k1) / 2;
     let pcut = bounds[2 * mid + colour] - pbase;
     let gcut = (colour * STRIP + 2 * mid * STRIP) * plane;
     let (pl, pr) = parts.split_at(pcut);
-    let (gl, gr) = grid.split_at(gcut);
+    let (gl, gr) = grid.split_grid(gcut);
     let (a, b) = rayon::join(
         || recurse(geom, bounds, colour, k0, mid, pl, pbase, gl, f),
         || recurse(geom, bounds, colour, mid, k1, pr, pbase + pcut, gr, f),

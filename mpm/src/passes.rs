@@ -176,53 +176,69 @@ pub fn p2g<D: Dim>(model: &Model<D>, st: &mut State<D>, sc: &mut Scratch<D>) -> 
     by_kernel!(model.kernel, p2g_k(model, st, sc))
 }
 
+/// P2G of particle `i`: its weights (cached for the step's later passes), mass and
+/// momentum scattered to `g`. `lq` holds the last half-width seen and its 1/(4l).
+#[allow(clippy::too_many_arguments)]
+#[inline(always)]
+fn p2g_particle<A: Arith, D: Dim>(
+    geom: &GridGeom<D>,
+    shape: ShapeFunction,
+    p: &mut PartsMut<'_, D>,
+    i: usize,
+    first: usize,
+    lq: &mut (f64, f64),
+    g: &mut GridMut<'_, D>,
+    acc: &mut Acc,
+) {
+    let k = p.kin[i];
+    let m = p.mech[i].m;
+    let lh = p.mech[i].lh;
+    if shape == ShapeFunction::Gimp && lh != lq.0 {
+        *lq = (lh, 0.25 / lh);
+    }
+    let xi = geom.xi(&k.x);
+    let c = pack::<D>(&weights::<D>(shape, &xi, lh, lq.1));
+    p.wts[i] = c;
+    // Active box: the stencil's base .. base + 2 per direction.
+    for (d, w) in c.as_ref().iter().enumerate() {
+        let b = i64::from(w.base);
+        if acc.has_box {
+            acc.lo[d] = acc.lo[d].min(b);
+            acc.hi[d] = acc.hi[d].max(b + 2);
+        } else {
+            acc.lo[d] = b;
+            acc.hi[d] = b + 2;
+        }
+    }
+    acc.has_box = true;
+    let v = k.v.as_ref();
+    if !v.iter().all(|x| x.is_finite()) {
+        first_fail(acc, first + i, FAIL_VELOCITY);
+    }
+    let mut mv = D::V::default();
+    for d in 0..D::N {
+        mv.as_mut()[d] = m * v[d];
+    }
+    each(g, geom, &c, true, |s, _, n| {
+        n.m = madd::<A>(s, m, n.m);
+        let (np, mv) = (n.p.as_mut(), mv.as_ref());
+        for d in 0..D::N {
+            np[d] = madd::<A>(s, mv[d], np[d]);
+        }
+    });
+}
+
 fn p2g_k<A: Arith, D: Dim>(model: &Model<D>, st: &mut State<D>, sc: &mut Scratch<D>) -> Acc {
     let geom = model.geom;
     let shape = model.shape;
-    let gimp = shape == ShapeFunction::Gimp;
-    strips(model, st, sc, &|_s, first, p, mut g| {
+    strips(model, st, sc, &|_s, first, mut p, mut g| {
         A::run(|| {
             let (geom, shape) = (geom, shape);
             let mut acc = Acc::default();
             p.assert_lengths();
             let mut lq = (f64::NAN, f64::NAN);
             for i in 0..p.len() {
-                let k = p.kin[i];
-                let m = p.mech[i].m;
-                let lh = p.mech[i].lh;
-                if gimp && lh != lq.0 {
-                    lq = (lh, 0.25 / lh);
-                }
-                let xi = geom.xi(&k.x);
-                let c = pack::<D>(&weights::<D>(shape, &xi, lh, lq.1));
-                p.wts[i] = c;
-                // Active box: the stencil's base .. base + 2 per direction.
-                for (d, w) in c.as_ref().iter().enumerate() {
-                    let b = i64::from(w.base);
-                    if acc.has_box {
-                        acc.lo[d] = acc.lo[d].min(b);
-                        acc.hi[d] = acc.hi[d].max(b + 2);
-                    } else {
-                        acc.lo[d] = b;
-                        acc.hi[d] = b + 2;
-                    }
-                }
-                acc.has_box = true;
-                let v = k.v.as_ref();
-                if !v.iter().all(|x| x.is_finite()) {
-                    first_fail(&mut acc, first + i, FAIL_VELOCITY);
-                }
-                let mut mv = D::V::default();
-                for d in 0..D::N {
-                    mv.as_mut()[d] = m * v[d];
-                }
-                each(&mut g, &geom, &c, true, |s, _, n| {
-                    n.m = madd::<A>(s, m, n.m);
-                    let (np, mv) = (n.p.as_mut(), mv.as_ref());
-                    for d in 0..D::N {
-                        np[d] = madd::<A>(s, mv[d], np[d]);
-                    }
-                });
+                p2g_particle::<A, D>(&geom, shape, &mut p, i, first, &mut lq, &mut g, &mut acc);
             }
             acc
         })
@@ -430,4 +446,67 @@ fn strain_k<A: Arith, D: Dim>(model: &Model<D>, st: &mut State<D>, sc: &mut Scra
             acc
         })
     })
+}
+
+/// Pass 4 fused with pass 1 of the next step: per particle, the second stress half-update
+/// from the current grid, then the new weights and the P2G into the spare grid
+/// (`Scratch::nodes_alt`, zeroed where it was written). Per node the P2G sums run in the
+/// same particle and strip order as an unfused P2G, so the results are bitwise identical
+/// (`tests/fused.rs`). Returns the reductions of pass 4 and of the next step's P2G.
+pub fn strain_p2g<D: Dim>(model: &Model<D>, st: &mut State<D>, sc: &mut Scratch<D>) -> (Acc, Acc) {
+    by_kernel!(model.kernel, strain_p2g_k(model, st, sc))
+}
+
+fn strain_p2g_k<A: Arith, D: Dim>(
+    model: &Model<D>,
+    st: &mut State<D>,
+    sc: &mut Scratch<D>,
+) -> (Acc, Acc) {
+    let geom = model.geom;
+    let shape = model.shape;
+    let half = 0.5 * model.dt;
+    let inv_h = 1.0 / geom.h;
+    let mats = &model.mats;
+    let f = |_s: usize,
+             first: usize,
+             mut p: PartsMut<'_, D>,
+             (mut gc, mut gn): (GridMut<'_, D>, GridMut<'_, D>)| {
+        A::run(|| {
+            let (geom, shape, half, inv_h) = (geom, shape, half, inv_h);
+            let mut acc = Acc::default();
+            let mut next = Acc::default();
+            p.assert_lengths();
+            let mut lq = (f64::NAN, f64::NAN);
+            for i in 0..p.len() {
+                let mech = p.mech[i];
+                let c = p.wts[i];
+                let l = gather_l::<A, D>(&mut gc, &geom, &c);
+                let mat = &mats[mech.mat as usize];
+                if !stress_apply::<A, D>(mat, &mut p.stress[i], &mut p.wden[i], l, half, inv_h) {
+                    first_fail(&mut acc, first + i, FAIL_STRESS);
+                }
+                acc.e += mech.vol * p.wden[i];
+                p2g_particle::<A, D>(&geom, shape, &mut p, i, first, &mut lq, &mut gn, &mut next);
+            }
+            (acc, next)
+        })
+    };
+    let bounds = &st.strip_bounds;
+    let mut out = (Acc::default(), Acc::default());
+    for colour in 0..2 {
+        let cur = GridMut {
+            nodes: &mut sc.nodes,
+            base: 0,
+        };
+        let nxt = GridMut {
+            nodes: &mut sc.nodes_alt,
+            base: 0,
+        };
+        let parts = PartsMut::new(&mut st.parts);
+        let a: (Acc, Acc) = for_strips(&geom, bounds, colour, parts, (cur, nxt), &|s, p, g| {
+            f(s, bounds[s], p, g)
+        });
+        out = if colour == 0 { a } else { out.merge(a) };
+    }
+    out
 }

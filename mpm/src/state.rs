@@ -252,4 +252,13 @@ pub struct Scratch<D: Dim> {
     pub plane_sums: Vec<f64>,
     /// Pass wall times.
     pub times: PassTimes,
+    /// Spare grid: the next step's P2G, scattered by a fused pass 4 (`passes::strain_p2g`).
+    pub nodes_alt: Vec<Node<D>>,
+    /// Box of `nodes_alt` that may be non-zero.
+    pub alt_box: Option<(D::U, D::U)>,
+    /// Reduction of the P2G already in `nodes_alt` for the coming step.
+    pub prefetched: Option<crate::passes::Acc>,
+    /// Fuse pass 4 with the next P2G where no re-sort falls between (on by default;
+    /// bitwise the same either way).
+    pub fuse: bool,
 }

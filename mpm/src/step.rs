@@ -277,6 +277,10 @@ impl<D: Dim> Simulation<D> {
             spare,
             plane_sums: vec![0.0; geom.cols],
             times: PassTimes::default(),
+            nodes_alt: Vec::new(),
+            alt_box: None,
+            prefetched: None,
+            fuse: true,
         };
         let mut state = State {
             parts: spec.particles,
@@ -303,6 +307,8 @@ impl<D: Dim> Simulation<D> {
         } else {
             Kernel::Portable
         };
+        // A P2G done ahead by the last fused step used the other arithmetic.
+        self.scratch.prefetched = None;
         self.model.kernel
     }
 
@@ -318,6 +324,8 @@ impl<D: Dim> Simulation<D> {
         for (k, c) in p.kin.iter_mut().zip(&p.cold) {
             k.v = f(&c.x0);
         }
+        // A P2G done ahead by the last fused step used the old velocities.
+        self.scratch.prefetched = None;
         let l = &mut self.state.ledger;
         l.kinetic = kinetic_energy(&self.state.parts);
         l.initial_total = l.kinetic + l.strain + l.dissipated - l.external_work;
@@ -373,9 +381,18 @@ impl<D: Dim> Simulation<D> {
         pool.install(|| self.step_inner())
     }
 
+    /// Fuse the last stress half-update with the next step's P2G where no re-sort falls
+    /// between (on by default; bitwise identical either way: `tests/fused.rs`).
+    pub fn set_fused_step(&mut self, on: bool) {
+        self.scratch.fuse = on;
+        self.scratch.prefetched = None;
+    }
+
     fn step_inner(&mut self) -> Result<StepStats, StepError> {
         let t = Instant::now();
-        if self.state.needs_sort {
+        // This step's P2G, when the last step's fused pass 4 did it.
+        let prefetched = self.take_prefetched();
+        if prefetched.is_none() && self.state.needs_sort {
             self.sort()?;
         }
         let mut mark = Instant::now();
@@ -388,12 +405,17 @@ impl<D: Dim> Simulation<D> {
         let dt = self.model.dt;
         let t0 = self.state.time;
         let t1 = t0 + dt;
-        self.reset_grid();
+        if prefetched.is_none() {
+            self.reset_grid();
+        }
         self.ramp_loads(t0);
         lap(|t| &mut t.grid, &mut self.scratch);
 
         let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
-        let acc = self.backend.p2g(m, st, sc);
+        let acc = match prefetched {
+            Some(acc) => acc,
+            None => self.backend.p2g(m, st, sc),
+        };
         lap(|t| &mut t.p2g, &mut self.scratch);
         self.check(&acc)?;
         self.set_active(&acc);
@@ -423,8 +445,17 @@ impl<D: Dim> Simulation<D> {
         self.nodal(2);
         lap(|t| &mut t.grid, &mut self.scratch);
 
-        let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
-        let acc = self.backend.strain(m, st, sc);
+        let acc = if self.scratch.fuse && !self.state.needs_sort {
+            self.zero_alt();
+            let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
+            let (acc, next) = self.backend.strain_p2g(m, st, sc);
+            self.scratch.alt_box = self.box_of(&next);
+            self.scratch.prefetched = Some(next);
+            acc
+        } else {
+            let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
+            self.backend.strain(m, st, sc)
+        };
         lap(|t| &mut t.strain, &mut self.scratch);
         self.check(&acc)?;
         self.state.ledger.strain = acc.e;
@@ -547,17 +578,75 @@ impl<D: Dim> Simulation<D> {
         Ok(())
     }
 
+    /// At the start of a step: when the last step's fused pass 4 did this step's P2G, swap
+    /// its grid in (the old one becomes the spare, dirty in its active box) and return the
+    /// P2G's reduction.
+    fn take_prefetched(&mut self) -> Option<Acc> {
+        let acc = self.scratch.prefetched.take()?;
+        let sc = &mut self.scratch;
+        std::mem::swap(&mut sc.nodes, &mut sc.nodes_alt);
+        sc.alt_box = sc.active;
+        Some(acc)
+    }
+
+    /// The grid box (clamped, inclusive) of a P2G's reduction; `None` when it wrote nothing.
+    fn box_of(&self, acc: &Acc) -> Option<(D::U, D::U)> {
+        if !acc.has_box {
+            return None;
+        }
+        let g = self.model.geom;
+        let mut lo = D::U::default();
+        let mut hi = D::U::default();
+        for d in 0..D::N {
+            lo.as_mut()[d] = acc.lo[d].max(0) as usize;
+            hi.as_mut()[d] = (acc.hi[d] as usize).min(g.n.as_ref()[d] - 1);
+        }
+        Some((lo, hi))
+    }
+
+    /// Zero the spare grid where it was last written (allocated on first use).
+    fn zero_alt(&mut self) {
+        let sc = &mut self.scratch;
+        if sc.nodes_alt.len() != sc.nodes.len() {
+            sc.nodes_alt = vec![Node::default(); sc.nodes.len()];
+            sc.alt_box = None;
+        }
+        if let Some(b) = sc.alt_box.take() {
+            let geom = self.model.geom;
+            for_box(&geom, &mut sc.nodes_alt, b, &mut sc.plane_sums, |n| {
+                *n = Node::default();
+                0.0
+            });
+        }
+    }
+
     /// Apply `f` to every node of the active box, planes in parallel; per-plane results
     /// are summed in plane order.
     fn each_active(&mut self, f: impl Fn(&mut Node<D>) -> f64 + Sync) -> f64 {
-        let Some((lo, hi)) = self.scratch.active else {
+        let Some(b) = self.scratch.active else {
             return 0.0;
         };
         let geom = self.model.geom;
+        let sc = &mut self.scratch;
+        for_box(&geom, &mut sc.nodes, b, &mut sc.plane_sums, f)
+    }
+}
+
+/// Apply `f` to every node of the box `(lo, hi)` of `nodes`, x-planes in parallel; the
+/// per-plane results are summed in plane order.
+fn for_box<D: Dim>(
+    geom: &GridGeom<D>,
+    nodes: &mut [Node<D>],
+    (lo, hi): (D::U, D::U),
+    plane_sums: &mut [f64],
+    f: impl Fn(&mut Node<D>) -> f64 + Sync,
+) -> f64 {
+    {
+        let geom = *geom;
         let plane = geom.plane();
         let (x0, x1) = (lo.as_ref()[0], hi.as_ref()[0]);
-        let planes = &mut self.scratch.nodes[(x0 + PAD) * plane..(x1 + 1 + PAD) * plane];
-        let sums = &mut self.scratch.plane_sums[..x1 + 1 - x0];
+        let planes = &mut nodes[(x0 + PAD) * plane..(x1 + 1 + PAD) * plane];
+        let sums = &mut plane_sums[..x1 + 1 - x0];
         let (lo, hi) = (lo, hi);
         planes
             .par_chunks_mut(plane)
@@ -583,7 +672,9 @@ impl<D: Dim> Simulation<D> {
             });
         sums.iter().sum()
     }
+}
 
+impl<D: Dim> Simulation<D> {
     /// Zero the grid where the last step wrote.
     fn reset_grid(&mut self) {
         self.each_active(|n| {
