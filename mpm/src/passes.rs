@@ -84,25 +84,39 @@ fn first_fail(acc: &mut Acc, i: usize, kind: u8) {
     }
 }
 
-/// Visit the stencil of cached weights `c` in the strip's grid `g`: `f(S, ∇S, node)`.
+/// A particle's stencil in a strip's grid: the unpacked weights and the storage offset of
+/// its first node in the strip's slice (unpacked once per particle and pass).
+struct Sten<D: Dim> {
+    w: D::W,
+    start: usize,
+}
+
+impl<D: Dim> Sten<D> {
+    #[inline(always)]
+    fn new(g: &GridMut<'_, D>, geom: &GridGeom<D>, c: &D::C) -> Self {
+        let w = unpack::<D>(c);
+        let start = geom.index_i32(|d| w.as_ref()[d].base) - g.base;
+        Sten { w, start }
+    }
+}
+
+/// Visit the stencil `st` in the strip's grid `g`: `f(S, ∇S, node)`.
 #[inline(always)]
 fn each<D: Dim>(
     g: &mut GridMut<'_, D>,
     geom: &GridGeom<D>,
-    c: &D::C,
+    st: &Sten<D>,
     weighted: bool,
     f: impl FnMut(f64, D::V, &mut crate::grid::Node<D>),
 ) {
-    let w = unpack::<D>(c);
-    let start = geom.index_i32(|d| w.as_ref()[d].base) - g.base;
-    D::visit(&w, &geom.strides, weighted, &mut g.nodes[start..], f);
+    D::visit(&st.w, &geom.strides, weighted, &mut g.nodes[st.start..], f);
 }
 
 /// L = Σ v ⊗ ∇S over the stencil (cell units), from the nodal velocities.
 #[inline(always)]
-fn gather_l<A: Arith, D: Dim>(g: &mut GridMut<'_, D>, geom: &GridGeom<D>, c: &D::C) -> D::L {
+fn gather_l<A: Arith, D: Dim>(g: &mut GridMut<'_, D>, geom: &GridGeom<D>, st: &Sten<D>) -> D::L {
     let mut l = D::L::default();
-    each(g, geom, c, false, |_, gr, n| {
+    each(g, geom, st, false, |_, gr, n| {
         let l = l.as_mut();
         let (v, gr) = (n.v.as_ref(), gr.as_ref());
         for r in 0..D::N {
@@ -219,7 +233,8 @@ fn p2g_particle<A: Arith, D: Dim>(
     for d in 0..D::N {
         mv.as_mut()[d] = m * v[d];
     }
-    each(g, geom, &c, true, |s, _, n| {
+    let st = Sten::new(g, geom, &c);
+    each(g, geom, &st, true, |s, _, n| {
         n.m = madd::<A>(s, m, n.m);
         let (np, mv) = (n.p.as_mut(), mv.as_ref());
         for d in 0..D::N {
@@ -283,14 +298,15 @@ fn forces_k<A: Arith, D: Dim>(
                 }
                 let vs = mech.vol * inv_h;
                 let c = p.wts[i];
-                let l = gather_l::<A, D>(&mut g, &geom, &c);
+                let st = Sten::new(&g, &geom, &c);
+                let l = gather_l::<A, D>(&mut g, &geom, &st);
                 let mat = &mats[mech.mat as usize];
                 if !stress_apply::<A, D>(mat, &mut p.stress[i], &mut p.wden[i], l, half, inv_h) {
                     first_fail(&mut acc, first + i, FAIL_STRESS);
                 }
                 let s = p.stress[i];
                 let nvs = -vs;
-                each(&mut g, &geom, &c, true, |sh, gr, n| {
+                each(&mut g, &geom, &st, true, |sh, gr, n| {
                     // f = −V σ·∇S.
                     let sg = D::stress_dot::<A>(&s, gr.as_ref());
                     let (nf, sg, fe) = (n.f.as_mut(), sg.as_ref(), fext.as_ref());
@@ -341,7 +357,8 @@ fn update_k<A: Arith, D: Dim>(
                 let c = p.wts[i];
                 let mut acc_p = D::V::default();
                 let mut vbar = D::V::default();
-                each(&mut g, &geom, &c, false, |sh, _, n| {
+                let st = Sten::new(&g, &geom, &c);
+                each(&mut g, &geom, &st, false, |sh, _, n| {
                     let (ap, vb) = (acc_p.as_mut(), vbar.as_mut());
                     for d in 0..D::N {
                         let an = sh * n.a.as_ref()[d];
@@ -405,7 +422,7 @@ fn update_k<A: Arith, D: Dim>(
                 for d in 0..D::N {
                     mv.as_mut()[d] = mech.m * v.as_ref()[d];
                 }
-                each(&mut g, &geom, &c, false, |sh, _, n| {
+                each(&mut g, &geom, &st, false, |sh, _, n| {
                     let q = n.q.as_mut();
                     for d in 0..D::N {
                         q[d] = madd::<A>(sh, mv.as_ref()[d], q[d]);
@@ -436,7 +453,8 @@ fn strain_k<A: Arith, D: Dim>(model: &Model<D>, st: &mut State<D>, sc: &mut Scra
             for i in 0..p.len() {
                 let mech = p.mech[i];
                 let c = p.wts[i];
-                let l = gather_l::<A, D>(&mut g, &geom, &c);
+                let st = Sten::new(&g, &geom, &c);
+                let l = gather_l::<A, D>(&mut g, &geom, &st);
                 let mat = &mats[mech.mat as usize];
                 if !stress_apply::<A, D>(mat, &mut p.stress[i], &mut p.wden[i], l, half, inv_h) {
                     first_fail(&mut acc, first + i, FAIL_STRESS);
@@ -480,7 +498,8 @@ fn strain_p2g_k<A: Arith, D: Dim>(
             for i in 0..p.len() {
                 let mech = p.mech[i];
                 let c = p.wts[i];
-                let l = gather_l::<A, D>(&mut gc, &geom, &c);
+                let st = Sten::new(&gc, &geom, &c);
+                let l = gather_l::<A, D>(&mut gc, &geom, &st);
                 let mat = &mats[mech.mat as usize];
                 if !stress_apply::<A, D>(mat, &mut p.stress[i], &mut p.wden[i], l, half, inv_h) {
                     first_fail(&mut acc, first + i, FAIL_STRESS);
