@@ -666,6 +666,14 @@ fn two_d_documents_read_exactly_as_before() {
             continue;
         }
         let text = std::fs::read_to_string(&path).unwrap();
+        let doc: Value = serde_json::from_str(&text).unwrap();
+        if doc["analysis"] == json!("3d") {
+            // The 3D example scenes read as 3D and validate.
+            let scene = parse_any_scene(&text).unwrap();
+            assert_eq!(scene.dimension(), 3, "{}", path.display());
+            validate_any(&scene).unwrap_or_else(|e| panic!("{}: {e}", path.display()));
+            continue;
+        }
         let two = parse_scene(&text).unwrap();
         match parse_any_scene(&text).unwrap() {
             AnyScene::Two(s) => {
@@ -828,4 +836,195 @@ fn the_worked_examples_of_the_guide_validate() {
         n += 1;
     }
     assert!(n >= 2, "{n} worked examples");
+}
+
+mod fuzz {
+    //! Mutated 3D scenes and random triangle soups: nothing panics, every error names a
+    //! path, an accepted scene round-trips through its canonical JSON. CI-sized (256 cases a
+    //! property); `PROPTEST_CASES=100000 cargo test --release -p fracture-api --test scene3
+    //! fuzz` for a long run.
+    use super::*;
+    use fracture_api::mesh::{MeshIndex, check_mesh};
+    use proptest::prelude::*;
+
+    fn config() -> ProptestConfig {
+        let cases = std::env::var("PROPTEST_CASES")
+            .ok()
+            .and_then(|v| v.parse().ok())
+            .unwrap_or(256);
+        ProptestConfig {
+            cases,
+            failure_persistence: None,
+            ..ProptestConfig::default()
+        }
+    }
+
+    /// Paths to every leaf (and every array and object) of `v`.
+    fn nodes(v: &Value, path: &mut Vec<String>, out: &mut Vec<Vec<String>>) {
+        out.push(path.clone());
+        match v {
+            Value::Object(m) => {
+                for (k, c) in m {
+                    path.push(k.clone());
+                    nodes(c, path, out);
+                    path.pop();
+                }
+            }
+            Value::Array(a) => {
+                for (i, c) in a.iter().enumerate() {
+                    path.push(i.to_string());
+                    nodes(c, path, out);
+                    path.pop();
+                }
+            }
+            _ => {}
+        }
+    }
+
+    fn at<'a>(v: &'a mut Value, path: &[String]) -> &'a mut Value {
+        path.iter().fold(v, |v, k| match v {
+            Value::Array(a) => &mut a[k.parse::<usize>().unwrap()],
+            _ => &mut v[k.as_str()],
+        })
+    }
+
+    fn replacement(i: usize) -> Value {
+        let all = [
+            json!(0),
+            json!(-1.0),
+            json!(1e300),
+            json!(-1e-300),
+            json!(0.5),
+            json!(3),
+            json!(1e-9),
+            json!(40000000000u64),
+            json!("x"),
+            json!("3d"),
+            json!(null),
+            json!([]),
+            json!({}),
+            json!([0.1, 0.2]),
+            json!([0.1, 0.1, 0.1]),
+            json!([[0, 1, 2]]),
+            json!({"box": {"min": [0.0, 0.0, 0.0], "max": [0.3, 0.3, 0.3]}}),
+        ];
+        all[i % all.len()].clone()
+    }
+
+    fn bases() -> Vec<Value> {
+        let (cv, ct) = cube_mesh(0.06, 0.14);
+        let mut mesh = steel_box();
+        mesh["bodies"][0]["region"] = mesh_json(&cv, &ct);
+        mesh["boundary_conditions"] = json!([{"region": {"cylinder": {"base": [0.0, 0.1, 0.1],
+            "axis": [0.2, 0.0, 0.0], "radius": 0.02}}, "velocity": {"x": 1.0}}]);
+        mesh["loads"] = json!([{"region": {"prism": {"polygon": [[0.0, 0.0], [0.2, 0.0], [0.1, 0.2]],
+            "z": [0.14, 0.2]}}, "traction": [0.0, 0.0, 1e6]}]);
+        mesh["output"] = json!({"slices": [{"normal": "x", "at": 0.1}], "snapshot_interval": 1e-6});
+        vec![steel_box(), mesh]
+    }
+
+    proptest! {
+        #![proptest_config(config())]
+
+        #[test]
+        fn mutated_3d_scenes_never_panic(base in 0usize..2, edits in prop::collection::vec((any::<usize>(), any::<usize>()), 1..4)) {
+            let mut v = bases()[base].clone();
+            for (node, value) in edits {
+                let mut all = Vec::new();
+                nodes(&v, &mut Vec::new(), &mut all);
+                let path = all[node % all.len()].clone();
+                *at(&mut v, &path) = replacement(value);
+            }
+            let text = v.to_string();
+            let scene = match parse_any_scene(&text) {
+                Ok(s) => s,
+                Err(e) => {
+                    prop_assert!(e.0.iter().all(|e| !e.path.is_empty() && !e.reason.is_empty()));
+                    return Ok(());
+                }
+            };
+            if let AnyScene::Three(s) = &scene
+                && fracture_api::lattice3::candidate_sites3(s) > 200_000
+            {
+                return Ok(()); // validation walks it; keep the fuzz fast
+            }
+            if let AnyScene::Two(_) = &scene {
+                return Ok(()); // the 2D fuzz (tests/fuzz.rs) covers 2D scenes
+            }
+            match validate_any(&scene) {
+                Ok(_) => {
+                    let canon = scene.canonical_json();
+                    let again = parse_any_scene(&canon).unwrap();
+                    prop_assert_eq!(again.canonical_json(), canon);
+                }
+                Err(e) => {
+                    prop_assert!(e.0.iter().all(|e| !e.path.is_empty() && !e.reason.is_empty()));
+                }
+            }
+        }
+
+        #[test]
+        fn a_rotated_cube_mesh_holds_the_rotated_box(
+            angles in (0.0f64..6.3, 0.0f64..6.3, 0.0f64..6.3),
+            points in prop::collection::vec((-1.0f64..1.0, -1.0f64..1.0, -1.0f64..1.0), 64),
+        ) {
+            // Rotation R = Rz·Ry·Rx; the cube [-0.5, 0.5]³ rotated about the origin and moved
+            // to c. A point is in the mesh iff R^T(p − c) is in the box (points within 1e-9
+            // of a face are skipped: either answer is right there).
+            let (a, b, g) = angles;
+            let rx = [[1.0, 0.0, 0.0], [0.0, a.cos(), -a.sin()], [0.0, a.sin(), a.cos()]];
+            let ry = [[b.cos(), 0.0, b.sin()], [0.0, 1.0, 0.0], [-b.sin(), 0.0, b.cos()]];
+            let rz = [[g.cos(), -g.sin(), 0.0], [g.sin(), g.cos(), 0.0], [0.0, 0.0, 1.0]];
+            let mul = |m: [[f64; 3]; 3], n: [[f64; 3]; 3]| {
+                let mut r = [[0.0; 3]; 3];
+                for i in 0..3 {
+                    for j in 0..3 {
+                        r[i][j] = (0..3).map(|k| m[i][k] * n[k][j]).sum();
+                    }
+                }
+                r
+            };
+            let r = mul(rz, mul(ry, rx));
+            let c = [0.3, -0.2, 0.1];
+            let (v, t) = cube_mesh(-0.5, 0.5);
+            let v: Vec<Vec3> = v
+                .iter()
+                .map(|p| [0, 1, 2].map(|i| c[i] + (0..3).map(|k| r[i][k] * p[k]).sum::<f64>()))
+                .collect();
+            prop_assert!(fracture_api::mesh::check_mesh(&v, &t).is_ok());
+            let mesh = Region3::Mesh(TriMesh::new(v, t));
+            for (x, y, z) in points {
+                let p = [c[0] + x, c[1] + y, c[2] + z];
+                let d = [x, y, z];
+                let q = [0, 1, 2].map(|j| (0..3).map(|k| r[k][j] * d[k]).sum::<f64>());
+                let margin = q.iter().map(|e| (e.abs() - 0.5).abs()).fold(f64::INFINITY, f64::min);
+                if margin < 1e-9 {
+                    continue;
+                }
+                let inside = q.iter().all(|e| e.abs() <= 0.5);
+                prop_assert_eq!(mesh.contains(p), inside, "{:?} {:?}", p, q);
+            }
+        }
+
+        #[test]
+        fn triangle_soups_never_panic(
+            verts in prop::collection::vec((0u8..3, 0u8..3, 0u8..3), 4..9),
+            tris in prop::collection::vec((0u32..10, 0u32..10, 0u32..10), 4..14),
+        ) {
+            // Coordinates on a 3³ lattice: coplanar, collinear and touching cases abound.
+            let v: Vec<Vec3> = verts.iter().map(|&(x, y, z)| [f64::from(x), f64::from(y), f64::from(z)]).collect();
+            let t: Vec<[u32; 3]> = tris.iter().map(|&(a, b, c)| [a, b, c]).collect();
+            let verdict = check_mesh(&v, &t);
+            let index = MeshIndex::new(&v, &t);
+            for p in [[0.5, 0.5, 0.5], [1.0, 1.0, 1.0], [1.5, 0.25, 2.0], [2.0, 2.0, 0.0]] {
+                let inside = index.contains(p);
+                if verdict.is_ok() {
+                    // A valid surface's winding is 0 or ±1: the column test agrees with
+                    // the point test.
+                    let r = Region3::Mesh(TriMesh::new(v.clone(), t.clone()));
+                    prop_assert_eq!(r.column(p[0], p[1]).contains(p[2]), inside);
+                }
+            }
+        }
+    }
 }

@@ -342,31 +342,71 @@ fn print_out(text: &str) -> ExitCode {
     }
 }
 
-/// `fracture validate`.
+/// `fracture validate`: a scene of either dimension (`"analysis": "3d"` is 3D); prints the
+/// run's size and memory estimate.
 pub fn validate(scene: &Path) -> ExitCode {
-    match load_scene(scene) {
-        Ok(scene) => {
-            let size = scene.size();
-            let est = fracture_api::cost::memory_estimate(&scene, size.particles);
-            print_out(&format!(
-                "{}: valid\nparticles: {}\ngrid nodes: {}\ntime step: {:e} s\nsteps: {}\n\
-                 particle-steps: {:e}\nmemory (estimate): {}\n",
-                scene.name,
-                size.particles,
-                size.grid_nodes,
-                size.time_step,
-                size.steps,
-                fracture_api::cost::particle_steps(size.particles, size.steps) as f64,
-                est
-            ))
+    let text = match std::fs::read_to_string(scene) {
+        Ok(t) => t,
+        Err(e) => {
+            return LoadError {
+                message: format!("error: cannot read {}: {e}", scene.display()),
+                code: EXIT_INVALID,
+            }
+            .report();
         }
-        Err(e) => e.report(),
-    }
+    };
+    let checked = fracture_api::parse_any_scene(&text)
+        .and_then(|s| fracture_api::validate_any(&s).map(|size| (s, size)));
+    let (parsed, size) = match checked {
+        Ok(ok) => ok,
+        Err(errors) => {
+            return LoadError {
+                message: format!(
+                    "error: {} is not a valid scene:\n{}",
+                    scene.display(),
+                    errors
+                        .0
+                        .iter()
+                        .map(|e| format!("  {e}"))
+                        .collect::<Vec<_>>()
+                        .join("\n")
+                ),
+                code: EXIT_INVALID,
+            }
+            .report();
+        }
+    };
+    let (valid, est) = match &parsed {
+        fracture_api::AnyScene::Two(s) => (
+            "valid",
+            fracture_api::cost::memory_estimate(s, size.particles),
+        ),
+        fracture_api::AnyScene::Three(s) => (
+            "valid (3D)",
+            fracture_api::cost::memory_estimate3(s, size.particles),
+        ),
+    };
+    print_out(&format!(
+        "{}: {valid}\nparticles: {}\ngrid nodes: {}\ntime step: {:e} s\nsteps: {}\n\
+         particle-steps: {:e}\nmemory (estimate): {}\n",
+        parsed.name(),
+        size.particles,
+        size.grid_nodes,
+        size.time_step,
+        size.steps,
+        fracture_api::cost::particle_steps(size.particles, size.steps) as f64,
+        est
+    ))
 }
 
-/// `fracture schema`.
-pub fn schema() -> ExitCode {
-    match serde_json::to_string_pretty(&Scene::json_schema()) {
+/// `fracture schema`: the 2D scene's JSON Schema, or with `three_d` (`--3d`) the 3D scene's.
+pub fn schema(three_d: bool) -> ExitCode {
+    let schema = if three_d {
+        fracture_api::Scene3::json_schema()
+    } else {
+        Scene::json_schema()
+    };
+    match serde_json::to_string_pretty(&schema) {
         Ok(s) => print_out(&format!("{s}\n")),
         Err(e) => {
             eprintln!("error: {e}");

@@ -7,7 +7,7 @@ use std::process::ExitCode;
 
 use clap::{Parser, Subcommand};
 
-use fracture_cli::{commands, local};
+use fracture_cli::{commands, import_stl, local};
 
 /// Dynamic fracture with the material point method: service and command-line tools.
 #[derive(Parser, Debug)]
@@ -59,21 +59,39 @@ enum Command {
         #[arg(long)]
         force: bool,
     },
-    /// Validate a scene and print the size of the run.
+    /// Validate a scene (2D, or 3D with "analysis": "3d") and print the size of the run.
     #[command(
-        after_help = "The scene format: docs/scenes.md; `fracture schema` prints \
-                            the JSON Schema."
+        after_help = "The scene format: docs/scenes.md (2D) and docs/scenes-3d.md (3D); \
+                            `fracture schema` (`--3d`) prints the JSON Schema."
     )]
     Validate {
         /// Scene JSON file.
         scene: PathBuf,
     },
-    /// Print the scene JSON Schema.
+    /// Print the scene JSON Schema (the 2D scene's; `--3d`: the 3D scene's).
     #[command(
         after_help = "Every field, with units, defaults and worked examples, is \
-                            explained in docs/scenes.md."
+                            explained in docs/scenes.md (2D) and docs/scenes-3d.md (3D)."
     )]
-    Schema,
+    Schema {
+        /// Print the 3D scene's schema ("analysis": "3d").
+        #[arg(long = "3d")]
+        three_d: bool,
+    },
+    /// Print an STL file's surface as a 3D scene's `mesh` region (JSON on stdout).
+    #[command(
+        after_help = "Reads ASCII or binary STL, merges exactly equal vertices and checks the \
+                            surface (closed, consistently oriented, not self-intersecting) \
+                            as validation will; exit status 2 names what is wrong. Paste the \
+                            output as a body's \"region\" (docs/scenes-3d.md, Meshes)."
+    )]
+    ImportStl {
+        /// STL file (ASCII or binary).
+        file: PathBuf,
+        /// Multiply every coordinate by this (STL has no units: 0.001 for a file in mm).
+        #[arg(long, default_value_t = 1.0)]
+        scale: f64,
+    },
     /// Benchmarks: throughput (particle-steps per second) and more.
     Bench(fracture_lab::BenchArgs),
     /// Studies: the seed's Rosakis parameter sweeps, with figures and the claims table
@@ -97,7 +115,8 @@ fn main() -> ExitCode {
             force,
         }) => local::run(&scene, &out, threads, vtk, force),
         Some(Command::Validate { scene }) => local::validate(&scene),
-        Some(Command::Schema) => local::schema(),
+        Some(Command::Schema { three_d }) => local::schema(three_d),
+        Some(Command::ImportStl { file, scale }) => import_stl::import_stl(&file, scale),
         Some(Command::Bench(a)) => fracture_lab::bench(a),
         Some(Command::Study(a)) => fracture_lab::study(a),
     }
