@@ -18,7 +18,6 @@ use std::sync::atomic::{AtomicBool, Ordering};
 use std::time::Duration;
 
 use fracture_api::results::{CrackTipRow, EnergyRow, Progress, RunStatus, Snapshot, Summary};
-use fracture_api::validate::parse_scene;
 use fracture_api::{Scene, ValidScene};
 use fracture_solver::Parallelism;
 use fracture_worker::{Control, LocalOutput, RunOptions, RunSink, SinkError, run_scene};
@@ -46,8 +45,14 @@ impl LoadError {
     }
 }
 
-/// Read, parse and validate a scene file.
-fn load_scene(path: &Path) -> Result<ValidScene, LoadError> {
+/// A valid scene of either dimension.
+enum Loaded {
+    Two(ValidScene),
+    Three(fracture_api::ValidScene3),
+}
+
+/// Read, parse and validate a scene file of either dimension (`"analysis": "3d"` is 3D).
+fn load_any_scene(path: &Path) -> Result<Loaded, LoadError> {
     let text = std::fs::read_to_string(path).map_err(|e| LoadError {
         message: format!("error: cannot read {}: {e}", path.display()),
         code: EXIT_INVALID,
@@ -65,8 +70,14 @@ fn load_scene(path: &Path) -> Result<ValidScene, LoadError> {
         ),
         code: EXIT_INVALID,
     };
-    let scene = parse_scene(&text).map_err(invalid)?;
-    ValidScene::new(scene).map_err(invalid)
+    match fracture_api::parse_any_scene(&text).map_err(invalid)? {
+        fracture_api::AnyScene::Two(scene) => {
+            ValidScene::new(scene).map(Loaded::Two).map_err(invalid)
+        }
+        fracture_api::AnyScene::Three(scene) => fracture_api::ValidScene3::new(scene)
+            .map(Loaded::Three)
+            .map_err(invalid),
+    }
 }
 
 /// The sink of `fracture run`: the run directory, plus a progress bar on a terminal.
@@ -111,6 +122,13 @@ impl RunSink for CliSink {
     }
     fn snapshot(&mut self, snap: &Snapshot) -> Result<(), SinkError> {
         let r = self.out.snapshot(snap);
+        self.check(r)
+    }
+    fn wants_volumes(&self) -> bool {
+        self.out.wants_volumes()
+    }
+    fn volume(&mut self, volume: &fracture_api::results::Volume) -> Result<(), SinkError> {
+        let r = self.out.volume(volume);
         self.check(r)
     }
     fn finish(&mut self, summary: &Summary) -> Result<(), SinkError> {
@@ -227,7 +245,7 @@ fn prepare_out(out: &Path, force: bool) -> Result<(), String> {
 /// `fracture run`; with `vtk`, also the VTK series of its snapshots (`OUT/vtk/`); `force`
 /// replaces a previous run's files in a non-empty `out`.
 pub fn run(scene: &Path, out: &Path, threads: Parallelism, vtk: bool, force: bool) -> ExitCode {
-    let scene = match load_scene(scene) {
+    let loaded = match load_any_scene(scene) {
         Ok(s) => s,
         Err(e) => return e.report(),
     };
@@ -242,11 +260,26 @@ pub fn run(scene: &Path, out: &Path, threads: Parallelism, vtk: bool, force: boo
             return ExitCode::from(EXIT_ERROR);
         }
     };
-    if let Err(e) = output.write_scene(&scene) {
+    let written = match &loaded {
+        Loaded::Two(scene) => output.write_scene(scene),
+        Loaded::Three(scene) => output.write_scene3(scene.scene()),
+    };
+    if let Err(e) = written {
         eprintln!("error: cannot write the run directory: {e}");
         return ExitCode::from(EXIT_ERROR);
     }
-    let bar = progress_bar(scene.size().steps);
+    // A 3D run's `--vtk`: its whole grid at each snapshot time, written as it runs
+    // (`OUT/vtk/volumes.pvd`); the 2D export below reads the snapshots back from the MCAP.
+    let volumes = vtk && matches!(loaded, Loaded::Three(_));
+    if volumes && let Err(e) = output.write_volumes(out.join("vtk")) {
+        eprintln!("error: cannot write the VTK volumes: {e}");
+        return ExitCode::from(EXIT_ERROR);
+    }
+    let steps = match &loaded {
+        Loaded::Two(scene) => scene.size().steps,
+        Loaded::Three(scene) => scene.size().steps,
+    };
+    let bar = progress_bar(steps);
     let opts = RunOptions {
         threads,
         flush_every: if bar.is_some() {
@@ -273,8 +306,21 @@ pub fn run(scene: &Path, out: &Path, threads: Parallelism, vtk: bool, force: boo
         output_failed: false,
         interrupted,
     };
-    let summary = run_scene(&scene, &opts, &mut sink);
-    let vtk_ok = !vtk || export_vtk(out);
+    let summary = match &loaded {
+        Loaded::Two(scene) => run_scene(scene, &opts, &mut sink),
+        Loaded::Three(scene) => fracture_worker::run_scene3(scene, &opts, &mut sink),
+    };
+    let cracks = match &loaded {
+        Loaded::Two(scene) => scene.scene().cracks.len(),
+        Loaded::Three(_) => 0,
+    };
+    let vtk_ok = !vtk || volumes || export_vtk(out);
+    if volumes && summary.status == RunStatus::Completed {
+        println!(
+            "VTK volumes: {} (ParaView)",
+            out.join("vtk").join("volumes.pvd").display()
+        );
+    }
     let message = summary.message.as_deref().unwrap_or("");
     match summary.status {
         RunStatus::Completed => {
@@ -288,10 +334,7 @@ pub fn run(scene: &Path, out: &Path, threads: Parallelism, vtk: bool, force: boo
                 summary.particle_steps_per_second
             );
             if !summary.tips.is_empty() {
-                print!(
-                    "{}",
-                    crate::answers::results_text(&summary, scene.scene().cracks.len())
-                );
+                print!("{}", crate::answers::results_text(&summary, cracks));
             }
             println!("results in {}", out.display());
             if !summary.tips.is_empty() {
@@ -345,51 +388,28 @@ fn print_out(text: &str) -> ExitCode {
 /// `fracture validate`: a scene of either dimension (`"analysis": "3d"` is 3D); prints the
 /// run's size and memory estimate.
 pub fn validate(scene: &Path) -> ExitCode {
-    let text = match std::fs::read_to_string(scene) {
-        Ok(t) => t,
-        Err(e) => {
-            return LoadError {
-                message: format!("error: cannot read {}: {e}", scene.display()),
-                code: EXIT_INVALID,
-            }
-            .report();
-        }
+    let loaded = match load_any_scene(scene) {
+        Ok(s) => s,
+        Err(e) => return e.report(),
     };
-    let checked = fracture_api::parse_any_scene(&text)
-        .and_then(|s| fracture_api::validate_any(&s).map(|size| (s, size)));
-    let (parsed, size) = match checked {
-        Ok(ok) => ok,
-        Err(errors) => {
-            return LoadError {
-                message: format!(
-                    "error: {} is not a valid scene:\n{}",
-                    scene.display(),
-                    errors
-                        .0
-                        .iter()
-                        .map(|e| format!("  {e}"))
-                        .collect::<Vec<_>>()
-                        .join("\n")
-                ),
-                code: EXIT_INVALID,
-            }
-            .report();
-        }
-    };
-    let (valid, est) = match &parsed {
-        fracture_api::AnyScene::Two(s) => (
+    let (name, valid, size, est) = match &loaded {
+        Loaded::Two(s) => (
+            &s.scene().name,
             "valid",
-            fracture_api::cost::memory_estimate(s, size.particles),
+            *s.size(),
+            fracture_api::cost::memory_estimate(s.scene(), s.size().particles),
         ),
-        fracture_api::AnyScene::Three(s) => (
+        Loaded::Three(s) => (
+            &s.scene().name,
             "valid (3D)",
-            fracture_api::cost::memory_estimate3(s, size.particles),
+            *s.size(),
+            fracture_api::cost::memory_estimate3(s.scene(), s.size().particles),
         ),
     };
     print_out(&format!(
         "{}: {valid}\nparticles: {}\ngrid nodes: {}\ntime step: {:e} s\nsteps: {}\n\
          particle-steps: {:e}\nmemory (estimate): {}\n",
-        parsed.name(),
+        name,
         size.particles,
         size.grid_nodes,
         size.time_step,

@@ -142,4 +142,10 @@ impl<S: RunSink + ?Sized> RunSink for &mut S {
     fn checkpoint(&mut self, bytes: &[u8], at: &CheckpointAt) -> Result<(), SinkError> {
         (**self).checkpoint(bytes, at)
     }
+    fn wants_volumes(&self) -> bool {
+        (**self).wants_volumes()
+    }
+    fn volume(&mut self, volume: &Volume) -> Result<(), SinkError> {
+        (**self).volume(volume)
+    }
 }
