@@ -148,7 +148,8 @@ pub enum Analysis {
     PlaneStrain,
     /// Plane stress (σ_zz = 0).
     PlaneStress,
-    /// Reserved for a future 3D solver; rejected by validation.
+    /// A 3D scene: such a document is a `Scene3` (`scene3.rs`, `docs/scenes-3d.md`); a 2D
+    /// `Scene` naming it is refused by validation.
     #[serde(rename = "3d")]
     ThreeD,
 }
