@@ -62,6 +62,7 @@ fn series() -> Vec<Snapshot> {
                 ],
                 cracks,
                 particles: None,
+                slice: None,
             }
         })
         .collect()

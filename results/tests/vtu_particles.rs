@@ -39,6 +39,7 @@ fn series() -> Vec<Snapshot> {
                     y,
                     components: vec![comp("sxx", 1.0e6), comp("vx", 1.5), comp("vy", -0.5)],
                 }),
+                slice: None,
             }
         })
         .collect()
