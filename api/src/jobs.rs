@@ -6,8 +6,9 @@ use std::collections::BTreeMap;
 use schemars::JsonSchema;
 use serde::{Deserialize, Serialize};
 
-use crate::results::{Progress, Summary};
+use crate::results::{Progress, SnapshotSlice, Summary};
 use crate::scene::Scene;
+use crate::scene3::AnyScene;
 
 /// State of a job.
 #[derive(
@@ -59,12 +60,15 @@ impl JobStatus {
     }
 }
 
-/// The wrapped form of `POST /api/v1/jobs`.
+/// The wrapped form of `POST /api/v1/jobs`. The scene type `S` is a 2D [`Scene`] by
+/// default; the service reads the wrapper with the scene as a JSON value first and then the
+/// scene by its `analysis` ([`crate::scene_any::any_scene_from_value`]), so a 3D scene gets
+/// through with its field paths in errors.
 #[derive(Debug, Clone, PartialEq, Serialize, Deserialize, JsonSchema)]
 #[serde(deny_unknown_fields)]
-pub struct JobRequest {
+pub struct JobRequest<S = Scene> {
     /// The scene to run.
-    pub scene: Scene,
+    pub scene: S,
     /// Higher runs first.
     #[serde(default)]
     pub priority: i64,
@@ -107,10 +111,11 @@ pub struct JobInfo {
     pub labels: BTreeMap<String, String>,
     /// Priority.
     pub priority: i64,
-    /// The scene (omitted in lists; its JSON Schema: `fracture schema`).
+    /// The scene (omitted in lists; its JSON Schema: `fracture schema`), 2D or 3D
+    /// (`"analysis": "3d"`).
     #[serde(default, skip_serializing_if = "Option::is_none")]
     #[schema(value_type = Option<Object>)]
-    pub scene: Option<Scene>,
+    pub scene: Option<AnyScene>,
     /// RFC 3339 UTC.
     pub created_at: String,
     /// RFC 3339 UTC.
@@ -202,6 +207,11 @@ pub struct SnapshotInfo {
     pub fields: Vec<String>,
     /// Component names (each renders as `{component}.png`).
     pub components: Vec<String>,
+    /// The plane of a 3D run this snapshot samples (extension of `api.md`; absent for 2D
+    /// runs): `{normal, at, node_at, axes}`, the picture's x and y being `axes`.
+    #[serde(default, skip_serializing_if = "Option::is_none")]
+    #[schema(value_type = Option<Object>)]
+    pub slice: Option<SnapshotSlice>,
 }
 
 /// One built-in example scene (`GET /api/v1/scenes`).

@@ -6,6 +6,9 @@
 //! * [`scene3`], [`mod@validate3`], [`lattice3`], [`mesh`]: the 3D scene (`"analysis": "3d"`,
 //!   `docs/scenes-3d.md`), its validation, its particle lattice and its triangle-mesh
 //!   regions; [`AnyScene`] and [`parse_any_scene`] take a document of either dimension.
+//! * [`scene_any`]: documents of either dimension as JSON values (what the service receives
+//!   and stores, [`any_scene_from_value`]); [`cost3`]: a 3D scene's particle estimate before
+//!   its lattice walk.
 //! * [`results`]: the rows and files a run produces (`run-output.md`): energy and crack-tip
 //!   history rows, field snapshots, the run summary.
 //! * [`jobs`]: job states and the request/response types of the HTTP API (`api.md`).
@@ -17,6 +20,7 @@
 
 pub mod clock;
 pub mod cost;
+pub mod cost3;
 pub mod jobs;
 pub mod lattice;
 pub mod lattice3;
@@ -26,12 +30,14 @@ pub mod protocol;
 pub mod results;
 pub mod scene;
 pub mod scene3;
+pub mod scene_any;
 pub mod sweep;
 pub mod tips;
 pub mod validate;
 pub mod validate3;
 
 pub use scene::Scene;
+pub use scene_any::any_scene_from_value;
 pub use scene3::{AnyScene, Scene3};
 pub use validate::{RunSize, ValidScene, ValidationError, ValidationErrors};
 pub use validate3::{ValidScene3, parse_any_scene, validate_any, validate3};

@@ -132,7 +132,7 @@ pub fn job_summary(job: &JobInfo, tips: &[TipStats], dashboard: &str) -> String 
         }
     }
     // Rows past the scene's cracks are its interfaces' failure fronts (run-output.md).
-    let n_cracks = job.scene.as_ref().map_or(usize::MAX, |sc| sc.cracks.len());
+    let n_cracks = job.scene.as_ref().map_or(usize::MAX, |sc| sc.crack_count());
     match &job.summary {
         Some(sum) if !sum.tips.is_empty() => s.push_str(&results_text(sum, n_cracks)),
         _ if tips.is_empty() => s.push_str("  crack tips: none recorded\n"),

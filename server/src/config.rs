@@ -76,9 +76,9 @@ impl Default for Limits {
 }
 
 /// One exceeded limit: its name and the detail naming the quantity, the value and the limit.
-type Exceeded = (&'static str, ErrorDetail);
+pub(crate) type Exceeded = (&'static str, ErrorDetail);
 
-fn exceeded(found: Vec<Exceeded>) -> Result<(), ApiError> {
+pub(crate) fn exceeded(found: Vec<Exceeded>) -> Result<(), ApiError> {
     if found.is_empty() {
         return Ok(());
     }
@@ -100,27 +100,36 @@ impl Limits {
     /// `max_particles` candidate sites. O(bodies): fine on an async thread.
     pub fn precheck(&self, scene: &Scene) -> Result<(), ApiError> {
         let est = estimate_particles(scene);
-        let message = if est.at_least > self.max_particles {
+        if let Some(e) = self.particle_precheck(est.at_least, est.sites) {
+            return Err(e);
+        }
+        if let Some(e) = time_step_overflow(scene) {
+            return Err(e);
+        }
+        // The cost with the lower particle estimate: cheap counts first.
+        let steps = cost::steps_estimate(scene).unwrap_or(0);
+        exceeded(self.cost(scene, est.at_least, steps, "at least "))
+    }
+
+    /// The `max_particles` part of a precheck, from a lower estimate of the particle count
+    /// and the candidate sites of the lattice walk (2D and 3D alike).
+    pub(crate) fn particle_precheck(&self, at_least: u64, sites: u64) -> Option<ApiError> {
+        let message = if at_least > self.max_particles {
             format!(
                 "the scene has at least {} particles (estimated from its bodies' regions), \
                  more than this server's limit max_particles = {}",
-                est.at_least, self.max_particles
+                at_least, self.max_particles
             )
-        } else if est.sites > self.max_particles.saturating_mul(SITES_PER_PARTICLE) {
+        } else if sites > self.max_particles.saturating_mul(SITES_PER_PARTICLE) {
             format!(
                 "the bodies' bounding boxes hold {} candidate particle sites, more than this \
                  server examines ({SITES_PER_PARTICLE} × its limit max_particles = {})",
-                est.sites, self.max_particles
+                sites, self.max_particles
             )
         } else {
-            if let Some(e) = time_step_overflow(scene) {
-                return Err(e);
-            }
-            // The cost with the lower particle estimate: cheap counts first.
-            let steps = cost::steps_estimate(scene).unwrap_or(0);
-            return exceeded(self.cost(scene, est.at_least, steps, "at least "));
+            return None;
         };
-        Err(ApiError::LimitExceeded {
+        Some(ApiError::LimitExceeded {
             message: "the scene exceeds this server's limits: max_particles".into(),
             details: vec![ErrorDetail {
                 path: "bodies".into(),
@@ -133,10 +142,24 @@ impl Limits {
     /// `steps` steps; `qualifier` ("at least ", or "" for exact counts) goes before the
     /// particle count in the messages.
     fn cost(&self, scene: &Scene, particles: u64, steps: u64, qualifier: &str) -> Vec<Exceeded> {
-        let mut found = Vec::new();
         let mem = cost::memory_estimate(scene, particles);
+        let (nx, ny) = cost::grid_dims(scene).unwrap_or((0, 0));
+        let grid = format!("{nx} × {ny} = {}", nx.saturating_mul(ny));
+        self.cost_of(&mem, &grid, particles, steps, qualifier)
+    }
+
+    /// [`Limits::cost`] of a run whose memory estimate is `mem`; `grid` describes its grid
+    /// nodes (`nx × ny = n`) in the message.
+    pub(crate) fn cost_of(
+        &self,
+        mem: &cost::MemoryEstimate,
+        grid: &str,
+        particles: u64,
+        steps: u64,
+        qualifier: &str,
+    ) -> Vec<Exceeded> {
+        let mut found = Vec::new();
         if mem.total > self.max_memory_bytes {
-            let (nx, ny) = cost::grid_dims(scene).unwrap_or((0, 0));
             let path = if mem.grid + mem.cracks + mem.snapshot >= mem.particles {
                 "grid.cell_size"
             } else {
@@ -147,11 +170,10 @@ impl Limits {
                 ErrorDetail {
                     path: path.into(),
                     message: format!(
-                        "the run needs about {} bytes of memory ({nx} × {ny} = {} grid nodes, \
+                        "the run needs about {} bytes of memory ({grid} grid nodes, \
                          {qualifier}{particles} particles: {mem}), more than this server's \
                          limit max_memory_bytes = {} ({})",
                         mem.total,
-                        nx.saturating_mul(ny),
                         self.max_memory_bytes,
                         cost::bytes(self.max_memory_bytes)
                     ),
@@ -273,8 +295,30 @@ impl Limits {
 
     /// Check a valid scene's size against the limits: 422 naming each exceeded limit.
     pub fn check(&self, scene: &Scene, size: &RunSize) -> Result<(), ApiError> {
+        let mut found = self.size_limits(&scene.name, size);
+        let snapshots = snapshot_count(scene);
+        let volume = snapshots.saturating_mul(size.grid_nodes);
+        if volume > self.max_snapshot_volume {
+            found.push((
+                "max_snapshot_volume",
+                ErrorDetail {
+                    path: "output.snapshot_interval".into(),
+                    message: format!(
+                        "{snapshots} snapshots × {} grid nodes = {volume}, more than this server's \
+                         limit max_snapshot_volume = {}",
+                        size.grid_nodes, self.max_snapshot_volume
+                    ),
+                },
+            ));
+        }
+        found.extend(self.cost(scene, size.particles, size.steps, ""));
+        exceeded(found)
+    }
+
+    /// The limits on a valid scene's name, particles and steps (2D and 3D alike).
+    pub(crate) fn size_limits(&self, name: &str, size: &RunSize) -> Vec<Exceeded> {
         let mut found: Vec<Exceeded> = Vec::new();
-        if let Err(e) = self.check_names(Some(&scene.name), &BTreeMap::new())
+        if let Err(e) = self.check_names(Some(name), &BTreeMap::new())
             && let ApiError::LimitExceeded { details, .. } = e
         {
             found.extend(details.into_iter().map(|d| ("max_name_bytes", d)));
@@ -303,23 +347,7 @@ impl Limits {
                 },
             ));
         }
-        let snapshots = snapshot_count(scene);
-        let volume = snapshots.saturating_mul(size.grid_nodes);
-        if volume > self.max_snapshot_volume {
-            found.push((
-                "max_snapshot_volume",
-                ErrorDetail {
-                    path: "output.snapshot_interval".into(),
-                    message: format!(
-                        "{snapshots} snapshots × {} grid nodes = {volume}, more than this server's \
-                         limit max_snapshot_volume = {}",
-                        size.grid_nodes, self.max_snapshot_volume
-                    ),
-                },
-            ));
-        }
-        found.extend(self.cost(scene, size.particles, size.steps, ""));
-        exceeded(found)
+        found
     }
 }
 

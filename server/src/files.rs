@@ -114,7 +114,7 @@ impl JobFiles {
         &self,
         id: &str,
         fence: i64,
-        scene: Option<&fracture_api::Scene>,
+        scene: Option<&fracture_api::AnyScene>,
     ) -> std::io::Result<()> {
         let old = self.lock().remove(id);
         if let Some((_, mut w)) = old {
@@ -135,7 +135,7 @@ impl JobFiles {
         &self,
         id: &str,
         fence: i64,
-        scene: Option<&fracture_api::Scene>,
+        scene: Option<&fracture_api::AnyScene>,
     ) -> std::io::Result<()> {
         let dir = self.dir(id);
         std::fs::create_dir_all(&dir)?;
@@ -143,7 +143,8 @@ impl JobFiles {
         let _ = std::fs::remove_file(&path);
         let mut w = McapWriter::create(&path).map_err(io_error)?;
         if let Some(scene) = scene {
-            w.write_scene(scene).map_err(io_error)?;
+            w.write_scene_parts(scene.name(), &scene.hash(), &scene.canonical_json())
+                .map_err(io_error)?;
         }
         self.lock().insert(id.to_string(), (fence, w));
         Ok(())

@@ -6,6 +6,8 @@
 //! * [`store`] owns the SQLite database (jobs, the queue with leases and fencing tokens,
 //!   history rows and snapshots); [`files`] owns each job's MCAP file. The server is the
 //!   one writer of both; workers talk HTTP only (`fracture_api::protocol`).
+//! * [`config`] holds the limits of a request; [`limits3`] applies them to 3D scenes
+//!   (`"analysis": "3d"`), which every route that takes a scene accepts.
 //! * [`service`] is `fracture serve`: the process around the router (store, reaper, local
 //!   worker processes, graceful shutdown).
 //!
@@ -19,6 +21,7 @@ pub mod error;
 pub mod events;
 pub mod files;
 pub mod http;
+pub mod limits3;
 pub mod server;
 pub mod service;
 pub mod store;

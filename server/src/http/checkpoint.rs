@@ -10,7 +10,7 @@ use axum::body::Body;
 use axum::extract::{Path, State};
 use axum::http::{StatusCode, header};
 use axum::response::{IntoResponse, Response};
-use fracture_api::Scene;
+use fracture_api::AnyScene;
 use fracture_api::jobs::ErrorBody;
 use serde::Deserialize;
 
@@ -210,7 +210,7 @@ async fn restart_file(
     blocking(move || {
         // The file records the scene when this version can read it; a file that cannot be
         // written is given up (`JobFiles`), not the claim.
-        let typed: Option<Scene> = serde_json::from_str(&text).ok();
+        let typed: Option<AnyScene> = serde_json::from_str(&text).ok();
         if files.start(&id, fence, typed.as_ref()).is_err() {
             return Ok(());
         }

@@ -1,5 +1,5 @@
-//! Jobs: submit (bare scene or `{scene, priority, labels}`), list with filters (status,
-//! labels, name search) and cursors, one job, rerun, cancel, delete.
+//! Jobs: submit (bare scene or `{scene, priority, labels}`, 2D or 3D), list with filters
+//! (status, labels, name search) and cursors, one job, rerun, cancel, delete.
 
 use std::collections::BTreeMap;
 
@@ -8,7 +8,7 @@ use axum::extract::{Path, RawQuery, State};
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::Response;
 use fracture_api::jobs::{CacheMode, ErrorBody, ErrorDetail, JobInfo, JobRequest, JobStatus};
-use fracture_api::validate;
+use fracture_api::{AnyScene, any_scene_from_value, scene_any};
 use serde::Deserialize;
 
 use super::auth::ApiToken;
@@ -18,35 +18,59 @@ use crate::error::{ApiError, JsonBody, parse_json};
 use crate::server::{AppState, new_job_id};
 use crate::store::{ListFilter, NewJob};
 
-/// The request of `POST /api/v1/jobs` in either form; field paths of errors are relative to
-/// the scene document in both.
-fn parse_job_request(value: serde_json::Value) -> Result<JobRequest, ApiError> {
+/// A wrapper field path of a request error, relative to the scene document (`scene.` taken
+/// off; `(document)` for the whole request).
+fn wrapper_error(e: serde_path_to_error::Error<serde_json::Error>) -> ApiError {
+    let path = e.path().to_string();
+    let path = match path.strip_prefix("scene.") {
+        Some(p) => p.to_string(),
+        None if path == "." => "(document)".to_string(),
+        None => path,
+    };
+    ApiError::InvalidScene(vec![ErrorDetail {
+        path,
+        message: e.into_inner().to_string(),
+    }])
+}
+
+/// The request of `POST /api/v1/jobs` in either form, with a scene of either dimension;
+/// field paths of errors are relative to the scene document in both. A 2D scene is read as
+/// it always was (the wrapper and its scene in one pass: the same errors); a 3D one
+/// (`"analysis": "3d"`) with the wrapper's scene as a JSON value first, then the scene by
+/// [`any_scene_from_value`].
+fn parse_job_request(value: serde_json::Value) -> Result<JobRequest<AnyScene>, ApiError> {
     let wrapped = value
         .as_object()
         .is_some_and(|o| o.contains_key("scene") && !o.contains_key("grid"));
-    if wrapped {
-        serde_path_to_error::deserialize::<_, JobRequest>(value).map_err(|e| {
-            let path = e.path().to_string();
-            let path = match path.strip_prefix("scene.") {
-                Some(p) => p.to_string(),
-                None if path == "." => "(document)".to_string(),
-                None => path,
-            };
-            ApiError::InvalidScene(vec![ErrorDetail {
-                path,
-                message: e.into_inner().to_string(),
-            }])
-        })
-    } else {
-        let scene = validate::scene_from_value(value)?;
-        Ok(JobRequest {
-            scene,
+    if !wrapped {
+        return Ok(JobRequest {
+            scene: any_scene_from_value(value)?,
             priority: 0,
             labels: BTreeMap::new(),
             cache: CacheMode::Reuse,
             max_attempts: None,
-        })
+        });
     }
+    let three = value.get("scene").is_some_and(scene_any::is_3d);
+    if !three {
+        let r = serde_path_to_error::deserialize::<_, JobRequest>(value).map_err(wrapper_error)?;
+        return Ok(JobRequest {
+            scene: AnyScene::Two(r.scene),
+            priority: r.priority,
+            labels: r.labels,
+            cache: r.cache,
+            max_attempts: r.max_attempts,
+        });
+    }
+    let r = serde_path_to_error::deserialize::<_, JobRequest<serde_json::Value>>(value)
+        .map_err(wrapper_error)?;
+    Ok(JobRequest {
+        scene: any_scene_from_value(r.scene)?,
+        priority: r.priority,
+        labels: r.labels,
+        cache: r.cache,
+        max_attempts: r.max_attempts,
+    })
 }
 
 /// A job's own retry budget must allow one claim (0 would never run).
@@ -63,7 +87,7 @@ pub(super) fn check_max_attempts(n: Option<u32>) -> Result<(), ApiError> {
 /// Submit a scene (bare, or wrapped as `{scene, priority, labels}`).
 #[utoipa::path(post, path = "/api/v1/jobs", tag = "jobs",
     request_body(content = Object, description = "A scene, or `{\"scene\": {...}, \"priority\": 0, \"labels\": {...}}` \
-        (the scene's JSON Schema: `fracture schema`)",
+        (the scene's JSON Schema: `fracture schema`; a 3D scene has `\"analysis\": \"3d\"`)",
         content_type = "application/json"),
     responses(
         (status = 201, description = "The job, queued", body = JobInfo),
@@ -88,9 +112,9 @@ pub(super) async fn create_job(
     let (scene, _) = admit(&st, req.scene).await?;
     let job = NewJob {
         id: new_job_id(),
-        name: scene.name.clone(),
+        name: scene.name().to_string(),
         scene: scene.canonical_json(),
-        end_time: scene.time.end,
+        end_time: scene.end_time(),
         priority: req.priority,
         labels: req.labels,
         rerun_of: None,
@@ -269,13 +293,13 @@ pub(super) async fn rerun_job(
     }
     let orig = job_or_404(&st, &id).await?;
     let value: serde_json::Value = serde_json::from_str(&orig.scene).map_err(ApiError::internal)?;
-    let scene = validate::scene_from_value(value)?;
+    let scene = any_scene_from_value(value)?;
     let (scene, _) = admit(&st, scene).await?;
     let job = NewJob {
         id: new_job_id(),
         name: orig.name.clone(),
         scene: scene.canonical_json(),
-        end_time: scene.time.end,
+        end_time: scene.end_time(),
         priority: orig.priority,
         labels: orig.labels.clone(),
         rerun_of: Some(orig.id.clone()),

@@ -9,20 +9,20 @@ use axum::extract::{Path, State};
 use axum::http::header;
 use axum::response::{IntoResponse, Response};
 use fracture_api::jobs::{ErrorBody, HealthInfo, JobStatus, SceneEntry, ValidateResponse};
-use fracture_api::{RunSize, Scene, cost, validate};
+use fracture_api::{AnyScene, RunSize, any_scene_from_value, cost, validate_any};
 
 use super::blocking;
 use crate::error::{ApiError, JsonBody, parse_json};
 use crate::server::AppState;
 
-/// Admit a scene: [`crate::config::Limits::precheck`] here (O(bodies): an enormous scene
-/// is refused at once), then validation and the exact limits on a blocking thread.
-/// Returns the scene back with its size.
-pub(super) async fn admit(st: &AppState, scene: Scene) -> Result<(Scene, RunSize), ApiError> {
+/// Admit a scene of either dimension: [`crate::config::Limits::precheck_any`] here
+/// (O(bodies): an enormous scene is refused at once), then validation and the exact limits
+/// on a blocking thread. Returns the scene back with its size.
+pub(super) async fn admit(st: &AppState, scene: AnyScene) -> Result<(AnyScene, RunSize), ApiError> {
     let limits = st.cfg.limits.clone();
-    limits.precheck(&scene)?;
+    limits.precheck_any(&scene)?;
     blocking(move || {
-        let size = limits.admit(&scene)?;
+        let size = limits.admit_any(&scene)?;
         Ok((scene, size))
     })
     .await
@@ -54,15 +54,15 @@ const MEASURED_RUNS: i64 = 100;
 /// particle, so the first request pays for it on a blocking thread).
 static SIZED_SCENES: OnceLock<Vec<SceneEntry>> = OnceLock::new();
 
-/// The embedded example scenes with `particles`, `steps` and `particle_steps` filled in
-/// from validation (left at 0 for a scene that does not validate).
+/// The embedded example scenes (2D and 3D) with `particles`, `steps` and `particle_steps`
+/// filled in from validation (left at 0 for a scene that does not validate).
 pub fn sized_scenes() -> Vec<SceneEntry> {
     crate::assets::scenes()
         .into_iter()
         .map(|mut e| {
-            let size = validate::scene_from_value(e.scene.clone())
+            let size = any_scene_from_value(e.scene.clone())
                 .ok()
-                .and_then(|s| validate::validate(&s).ok());
+                .and_then(|s| validate_any(&s).ok());
             if let Some(size) = size {
                 e.particles = size.particles;
                 e.steps = size.steps;
@@ -144,9 +144,9 @@ pub(super) async fn list_scenes(
     ))
 }
 
-/// Validate a scene and report the size of its run.
+/// Validate a scene (2D, or 3D with `"analysis": "3d"`) and report the size of its run.
 #[utoipa::path(post, path = "/api/v1/scenes/validate", tag = "scenes",
-    request_body(content = Object, description = "A scene (its JSON Schema: `fracture schema`)",
+    request_body(content = Object, description = "A scene, 2D or 3D (`\"analysis\": \"3d\"`; its JSON Schema: `fracture schema`)",
         content_type = "application/json"),
     responses(
         (status = 200, description = "The size of the run", body = ValidateResponse),
@@ -158,7 +158,7 @@ pub(super) async fn validate_scene(
     JsonBody(body): JsonBody,
 ) -> Result<Json<ValidateResponse>, ApiError> {
     let value: serde_json::Value = parse_json(&body)?;
-    let scene = validate::scene_from_value(value)?;
+    let scene = any_scene_from_value(value)?;
     let (_, size) = admit(&st, scene).await?;
     Ok(Json(ValidateResponse {
         valid: true,

@@ -91,8 +91,8 @@ async fn particles(cache: &Arc<ParticleCache>, id: &str, scene: &str) -> Option<
     }
     let scene = scene.to_string();
     let n = blocking(move || {
-        let s: fracture_api::Scene = serde_json::from_str(&scene).map_err(ApiError::internal)?;
-        fracture_api::validate::validate(&s)
+        let s: fracture_api::AnyScene = serde_json::from_str(&scene).map_err(ApiError::internal)?;
+        fracture_api::validate_any(&s)
             .map(|size| size.particles)
             .map_err(|e| ApiError::internal(format!("{e:?}")))
     })

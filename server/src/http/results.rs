@@ -103,14 +103,19 @@ pub(super) async fn get_crack_tips(
 #[utoipa::path(get, path = "/api/v1/jobs/{id}/path.svg", tag = "results",
     params(("id" = String, Path, description = "Job id")),
     responses((status = 200, description = "An SVG picture (`image/svg+xml`)", content_type = "image/svg+xml", body = String),
-        (status = 404, description = "Unknown id, or a scene without cracks or interfaces", body = ErrorBody)))]
+        (status = 404, description = "Unknown id, a scene without cracks or interfaces, or a 3D scene", body = ErrorBody)))]
 pub(super) async fn path_svg(
     State(st): State<AppState>,
     Path(id): Path<String>,
 ) -> Result<Response, ApiError> {
     let (job, src) = results_of(&st, &id).await?;
-    let scene: fracture_api::Scene =
+    let scene: fracture_api::AnyScene =
         serde_json::from_str(&job.scene).map_err(ApiError::internal)?;
+    let Some(scene) = scene.as_2d().cloned() else {
+        return Err(ApiError::NotFound(format!(
+            "job `{id}` is a 3D run: its cracks are surfaces with fronts, not tip paths to draw"
+        )));
+    };
     if scene.cracks.is_empty() && scene.interfaces.is_empty() {
         return Err(ApiError::NotFound(format!(
             "job `{id}` has no cracks or interfaces: there is no crack path to draw"

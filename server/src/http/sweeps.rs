@@ -7,10 +7,10 @@ use axum::Json;
 use axum::extract::{Path, State};
 use axum::http::{HeaderMap, StatusCode};
 use axum::response::Response;
+use fracture_api::any_scene_from_value;
 use fracture_api::jobs::CacheMode;
 use fracture_api::jobs::{ErrorBody, ErrorDetail, JobStatus};
 use fracture_api::sweep::{self, SweepInfo, SweepJob, SweepParameter, SweepRequest};
-use fracture_api::validate;
 use serde::Deserialize;
 
 use super::auth::ApiToken;
@@ -149,7 +149,7 @@ struct SweepBase<'a> {
 }
 
 /// Every job of a sweep: each combination built from the base scene and admitted
-/// ([`Limits::admit`]: the cheap limits, validation, the exact limits). Any invalid
+/// ([`Limits::admit_any`], 2D or 3D: the cheap limits, validation, the exact limits). Any invalid
 /// combination refuses the whole sweep with one detail per problem. CPU-bound: run it off
 /// the async threads.
 fn build_sweep_jobs(b: &SweepBase<'_>) -> Result<Vec<NewSweepJob>, ApiError> {
@@ -168,9 +168,9 @@ fn build_sweep_jobs(b: &SweepBase<'_>) -> Result<Vec<NewSweepJob>, ApiError> {
             sweep::set_path(&mut doc, &p.path, v)
                 .map_err(|e| ApiError::BadRequest(e.to_string()))?;
         }
-        let checked = validate::scene_from_value(doc)
+        let checked = any_scene_from_value(doc)
             .map_err(ApiError::from)
-            .and_then(|scene| b.limits.admit(&scene).map(|_| scene));
+            .and_then(|scene| b.limits.admit_any(&scene).map(|_| scene));
         let scene = match checked {
             Ok(scene) => scene,
             Err(e) => {
@@ -218,7 +218,7 @@ fn build_sweep_jobs(b: &SweepBase<'_>) -> Result<Vec<NewSweepJob>, ApiError> {
                 id: new_job_id(),
                 name: format!("{} ({label})", b.name),
                 scene: scene.canonical_json(),
-                end_time: scene.time.end,
+                end_time: scene.end_time(),
                 priority: b.priority,
                 labels,
                 rerun_of: None,

@@ -215,6 +215,7 @@ pub(super) async fn worker_snapshot(
         time: snap.time,
         fields: snap.fields.clone(),
         components: snap.components.iter().map(|c| c.name.clone()).collect(),
+        slice: snap.slice.clone(),
     };
     write_file(&st, &id, q.fence, Record::Snapshot(Box::new(snap))).await?;
     st.hub.send(&id, JobEvent::Snapshot(info));

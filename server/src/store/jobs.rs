@@ -3,7 +3,7 @@
 
 use std::collections::BTreeMap;
 
-use fracture_api::Scene;
+use fracture_api::AnyScene;
 use fracture_api::jobs::{JobInfo, JobStatus, StatusEvent};
 use fracture_api::results::{Progress, Summary};
 use sqlx::QueryBuilder;
@@ -117,7 +117,7 @@ impl JobRow {
     /// The job as the API shows it; `with_scene` adds the scene document (decoded here:
     /// a stored scene this version cannot read is [`StoreError::Corrupt`]).
     pub fn info(&self, with_scene: bool) -> Result<JobInfo, StoreError> {
-        let scene: Option<Scene> = if with_scene {
+        let scene: Option<AnyScene> = if with_scene {
             Some(from_json("scene", &self.scene)?)
         } else {
             None
@@ -187,7 +187,7 @@ pub struct NewJob {
     pub labels: BTreeMap<String, String>,
     /// The job this one reruns, if any.
     pub rerun_of: Option<String>,
-    /// SHA-256 of the canonical scene JSON ([`fracture_api::Scene::hash`]).
+    /// SHA-256 of the canonical scene JSON ([`fracture_api::AnyScene::hash`]).
     pub scene_hash: String,
     /// Answer from a completed job with the same scene hash and this server's solver
     /// version, if there is one, instead of queueing a run.

@@ -221,8 +221,8 @@ impl Store {
         .collect())
     }
 
-    /// Snapshot index entries, in order. The component names come from the blobs, decoded
-    /// off the async threads (a snapshot holds every grid node).
+    /// Snapshot index entries, in order. The component names (and a 3D run's slice plane)
+    /// come from the blobs, decoded off the async threads (a snapshot holds every grid node).
     pub async fn snapshots(&self, id: &str) -> Result<Vec<SnapshotInfo>, StoreError> {
         let rows = on_db!(&self.db, c => sqlx::query(
             "SELECT idx, time, fields, data FROM snapshots WHERE job_id = $1 ORDER BY idx",
@@ -236,15 +236,13 @@ impl Store {
         blocking(move || {
             rows.into_iter()
                 .map(|(index, time, fields, data)| {
+                    let snap = decode(&data)?;
                     Ok(SnapshotInfo {
                         index,
                         time,
                         fields,
-                        components: decode(&data)?
-                            .components
-                            .into_iter()
-                            .map(|c| c.name)
-                            .collect(),
+                        components: snap.components.into_iter().map(|c| c.name).collect(),
+                        slice: snap.slice,
                     })
                 })
                 .collect()
