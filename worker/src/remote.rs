@@ -1,5 +1,6 @@
 //! The remote worker: claims jobs from a server over HTTP (`/api/v1/worker/…`), runs them
-//! with [`run_scene`](crate::run_scene), heartbeats, obeys cancellation, and streams the
+//! with [`run_job`](crate::run_job) (2D) or [`run_job3`](crate::run_job3) (3D scenes,
+//! `"analysis": "3d"`: energies, progress and slice snapshots stream alike), heartbeats, obeys cancellation, and streams the
 //! results through an HTTP [`RunSink`], retrying transient failures. Asked to stop
 //! ([`crate::batch`]) it hands its job back to the queue and exits; it also exits after
 //! `idle_exit` without a job or after `max_jobs` claims.
@@ -27,7 +28,7 @@ use fracture_api::jobs::ErrorBody;
 use fracture_api::results::{
     CrackTipRow, EnergyRow, FailureKind, Progress, RunStatus, Snapshot, Summary,
 };
-use fracture_api::{Scene, ValidScene};
+use fracture_api::{AnyScene, ValidScene, ValidScene3};
 use reqwest::StatusCode;
 use reqwest::blocking::{Client, Response};
 
@@ -314,7 +315,14 @@ pub fn run_worker(cfg: WorkerConfig) -> anyhow::Result<()> {
     }
 }
 
-fn failed_summary(scene: Option<&Scene>, failure: FailureKind, message: String) -> Summary {
+/// The summary of a job that failed before (or instead of) running: `hash` is its scene's
+/// hash (empty when the scene could not be read), `dimension` `Some(3)` for a 3D scene.
+fn failed_summary(
+    hash: String,
+    dimension: Option<u32>,
+    failure: FailureKind,
+    message: String,
+) -> Summary {
     Summary {
         status: RunStatus::Failed,
         message: Some(message),
@@ -328,7 +336,7 @@ fn failed_summary(scene: Option<&Scene>, failure: FailureKind, message: String) 
         wall_seconds: 0.0,
         particle_steps_per_second: 0.0,
         threads: 0,
-        scene_hash: scene.map(Scene::hash).unwrap_or_default(),
+        scene_hash: hash,
         solver_version: fracture_api::SOLVER_VERSION.to_string(),
         fracture: None,
         provenance: Some(crate::provenance::provenance(
@@ -336,7 +344,65 @@ fn failed_summary(scene: Option<&Scene>, failure: FailureKind, message: String) 
         )),
         tips: Vec::new(),
         references: Vec::new(),
-        dimension: None,
+        dimension,
+    }
+}
+
+/// A claimed job's scene as this worker validated it: 2D, or 3D (`"analysis": "3d"`).
+enum Valid {
+    /// A 2D scene, run by [`crate::run_job`].
+    Two(ValidScene),
+    /// A 3D scene, run by [`crate::run_job3`].
+    Three(ValidScene3),
+}
+
+impl Valid {
+    /// Validate a scene of either dimension.
+    fn new(scene: AnyScene) -> Result<Valid, fracture_api::ValidationErrors> {
+        Ok(match scene {
+            AnyScene::Two(s) => Valid::Two(ValidScene::new(s)?),
+            AnyScene::Three(s) => Valid::Three(ValidScene3::new(s)?),
+        })
+    }
+
+    /// The scene's hash.
+    fn hash(&self) -> String {
+        match self {
+            Valid::Two(v) => v.scene().hash(),
+            Valid::Three(v) => v.scene().hash(),
+        }
+    }
+
+    /// `Some(3)` for a 3D scene (as its summary says), `None` for 2D.
+    fn dimension(&self) -> Option<u32> {
+        matches!(self, Valid::Three(_)).then_some(3)
+    }
+
+    /// The failed summary of this scene's job.
+    fn failed(&self, failure: FailureKind, message: String) -> Summary {
+        failed_summary(self.hash(), self.dimension(), failure, message)
+    }
+
+    /// The run's memory estimate (`fracture_api::cost`) with the validated particle count.
+    fn memory(&self) -> fracture_api::cost::MemoryEstimate {
+        match self {
+            Valid::Two(v) => fracture_api::cost::memory_estimate(v.scene(), v.size().particles),
+            Valid::Three(v) => fracture_api::cost::memory_estimate3(v.scene(), v.size().particles),
+        }
+    }
+
+    /// Run the job (resuming from `checkpoint` when given; `Err` when it cannot be used).
+    fn run(
+        &self,
+        opts: &RunOptions,
+        policy: crate::CheckpointPolicy,
+        checkpoint: Option<&[u8]>,
+        sink: &mut HttpSink<'_>,
+    ) -> Result<Summary, String> {
+        match self {
+            Valid::Two(v) => crate::run_job(v, opts, policy, checkpoint, sink),
+            Valid::Three(v) => crate::run_job3(v, opts, policy, checkpoint, sink),
+        }
     }
 }
 
@@ -409,40 +475,45 @@ fn run_claim(api: &Api, cfg: &WorkerConfig, claim: Claim) -> bool {
         handed_back: None,
     };
     // The server validated the scene before queueing it; a worker of another version may
-    // still disagree, so it validates once more here (the only way to a `ValidScene`).
-    let summary = match fracture_api::validate::scene_from_value(claim.scene) {
-        Ok(scene) => match ValidScene::new(scene.clone()) {
-            Ok(valid) => {
-                let threads = cfg.threads.resolve();
-                let est = fracture_api::cost::memory_estimate(&scene, valid.size().particles);
-                match cfg.max_memory.filter(|m| est.total > *m) {
-                    Some(max) => failed_summary(
-                        Some(&scene),
-                        FailureKind::InvalidScene,
-                        format!(
-                            "the run needs about {} of memory ({est}), more than this \
-                             worker's limit of {}",
-                            fracture_api::cost::bytes(est.total),
-                            fracture_api::cost::bytes(max)
+    // still disagree, so it validates once more here (the only way to a `ValidScene` or a
+    // `ValidScene3`).
+    let summary = match fracture_api::any_scene_from_value(claim.scene) {
+        Ok(scene) => {
+            let (hash, dimension) = (scene.hash(), (scene.dimension() == 3).then_some(3));
+            match Valid::new(scene) {
+                Ok(valid) => {
+                    let threads = cfg.threads.resolve();
+                    let est = valid.memory();
+                    match cfg.max_memory.filter(|m| est.total > *m) {
+                        Some(max) => valid.failed(
+                            FailureKind::InvalidScene,
+                            format!(
+                                "the run needs about {} of memory ({est}), more than this \
+                                 worker's limit of {}",
+                                fracture_api::cost::bytes(est.total),
+                                fracture_api::cost::bytes(max)
+                            ),
                         ),
-                    ),
-                    None => {
-                        let _cap = MemoryCap::set(est.total, threads);
-                        let opts = RunOptions {
-                            threads: cfg.threads,
-                            flush_every: cfg.flush_every,
-                        };
-                        run_resumable(api, cfg, &job, fence, &valid, &opts, &mut sink)
+                        None => {
+                            let _cap = MemoryCap::set(est.total, threads);
+                            let opts = RunOptions {
+                                threads: cfg.threads,
+                                flush_every: cfg.flush_every,
+                            };
+                            run_resumable(api, cfg, &job, fence, &valid, &opts, &mut sink)
+                        }
                     }
                 }
+                Err(e) => failed_summary(
+                    hash,
+                    dimension,
+                    FailureKind::InvalidScene,
+                    format!("the claimed scene is not valid here:\n{e}"),
+                ),
             }
-            Err(e) => failed_summary(
-                Some(&scene),
-                FailureKind::InvalidScene,
-                format!("the claimed scene is not valid here:\n{e}"),
-            ),
-        },
+        }
         Err(e) => failed_summary(
+            String::new(),
             None,
             FailureKind::InvalidScene,
             format!("the claimed scene could not be read: {e}"),
@@ -522,7 +593,7 @@ fn run_resumable(
     cfg: &WorkerConfig,
     job: &str,
     fence: i64,
-    valid: &ValidScene,
+    valid: &Valid,
     opts: &RunOptions,
     sink: &mut HttpSink<'_>,
 ) -> Summary {
@@ -534,8 +605,7 @@ fn run_resumable(
             // Without it the run cannot start at the history the server kept.
             tracing::warn!(job = %job, error = %e, "cannot fetch the checkpoint");
             if api.refuse_checkpoint(job, fence).is_err() {
-                return failed_summary(
-                    Some(valid.scene()),
+                return valid.failed(
                     FailureKind::Output,
                     format!("could not fetch or drop the job's checkpoint: {e}"),
                 );
@@ -544,13 +614,12 @@ fn run_resumable(
         }
     };
     if let Some(b) = bytes {
-        match crate::run_job(valid, opts, policy, Some(&b), sink) {
+        match valid.run(opts, policy, Some(&b), sink) {
             Ok(s) => return s,
             Err(why) => {
                 tracing::warn!(job = %job, reason = %why, "checkpoint refused; starting over from step 0");
                 if let Err(e) = api.retry(HttpSink::BUDGET, || api.refuse_checkpoint(job, fence)) {
-                    return failed_summary(
-                        Some(valid.scene()),
+                    return valid.failed(
                         FailureKind::Output,
                         format!(
                             "the job's checkpoint was refused ({why}) and could not be dropped: {e}"
@@ -560,9 +629,9 @@ fn run_resumable(
             }
         }
     }
-    match crate::run_job(valid, opts, policy, None, sink) {
+    match valid.run(opts, policy, None, sink) {
         Ok(s) => s,
-        Err(e) => failed_summary(Some(valid.scene()), FailureKind::Output, e),
+        Err(e) => valid.failed(FailureKind::Output, e),
     }
 }
 
