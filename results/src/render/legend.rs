@@ -41,6 +41,14 @@ impl Quantity {
             "speed" => ("|v|", Unit::MetrePerSecond),
             "ux" => ("u_x", Unit::Metre),
             "uy" => ("u_y", Unit::Metre),
+            // 3D runs' slices
+            "syz" => ("σ_yz", Unit::Pascal),
+            "sxz" => ("σ_xz", Unit::Pascal),
+            "ezz" => ("ε_zz", Unit::Strain),
+            "eyz" => ("ε_yz", Unit::Strain),
+            "exz" => ("ε_xz", Unit::Strain),
+            "vz" => ("v_z", Unit::MetrePerSecond),
+            "uz" => ("u_z", Unit::Metre),
             "fringe" => ("fringe order N", Unit::Fringe),
             "material" => ("material", Unit::None),
             _ => ("", Unit::None),
@@ -352,6 +360,17 @@ impl Layout {
     }
 }
 
-fn title(snap: &Snapshot, label: &str) -> String {
-    format!("{label}   t = {}   #{}", si(snap.time, "s"), snap.index)
+/// The picture's title: the quantity, the time and the snapshot's index, and for a 3D run's
+/// slice its plane (`z = 2 mm`: the picture's axes are the other two).
+pub(super) fn title(snap: &Snapshot, label: &str) -> String {
+    let plane = snap
+        .slice
+        .as_ref()
+        .map(|s| format!("   {} = {}", s.normal, si(s.at, "m")))
+        .unwrap_or_default();
+    format!(
+        "{label}   t = {}   #{}{plane}",
+        si(snap.time, "s"),
+        snap.index
+    )
 }

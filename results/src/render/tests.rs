@@ -199,6 +199,37 @@ fn legend_names_the_quantity_and_unit() {
     }
 }
 
+/// A 3D run's slice: its components get their quantity and unit, and the title names the
+/// plane (the picture's axes being the other two).
+#[test]
+fn slices_name_their_plane_and_3d_components() {
+    let n = 21 * 11;
+    for (name, v, label) in [
+        ("syz", 5.0e7f32, "σyz (MPa)"),
+        ("vz", 0.02, "vz (mm/s)"),
+        ("uz", 3.0e-5, "uz (µm)"),
+        ("ezz", 2.0e-3, "εzz (×1e-3)"),
+    ] {
+        let vals: Vec<f32> = (0..n).map(|i| v * (i as f32 / n as f32)).collect();
+        let mut snap = snapshot(21, 11, 1e-3, vec![(name, vals)]);
+        snap.slice = Some(fracture_api::results::SnapshotSlice {
+            normal: "y".into(),
+            at: 0.002,
+            node_at: 0.002,
+            axes: ["x".into(), "z".into()],
+        });
+        let r = render_png_with(&snap, name, &RenderOptions::default()).expect("renders");
+        assert_eq!(r.report.label, label);
+        assert!(
+            legend::title(&snap, "q").ends_with("#3   y = 2 mm"),
+            "{}",
+            legend::title(&snap, "q")
+        );
+    }
+    let flat = snapshot(21, 11, 1e-3, vec![("sxx", vec![0.0; n])]);
+    assert!(legend::title(&flat, "q").ends_with("#3"));
+}
+
 /// Whether any pixel of the PNG has the warning colour.
 fn has_warning_ink(png_bytes: &[u8]) -> bool {
     let (_, _, px) = decode(png_bytes);
