@@ -1,11 +1,14 @@
 // Field pictures: the colour range of a snapshot picture (the PNG's `?range=LO,HI`, in SI
 // units: server/src/http/results.rs) chosen as auto (the data's range), symmetric (±A) or
-// manual (min–max). Pure; tested in web/test/fields.test.mjs.
+// manual (min–max); the plane of a 3D run's slice (`snapshot.slice`). Pure; tested in
+// web/test/dashboard-features.test.mjs.
 
 /** SI unit of each component's values (strain has none). */
 export const COMPONENT_UNITS = {
   sxx: 'Pa', syy: 'Pa', sxy: 'Pa', von_mises: 'Pa', speed: 'm/s', vx: 'm/s', vy: 'm/s',
   ux: 'm', uy: 'm', umag: 'm', exx: '', eyy: '', exy: '',
+  // 3D runs' slices
+  szz: 'Pa', syz: 'Pa', sxz: 'Pa', vz: 'm/s', uz: 'm', ezz: '', eyz: '', exz: '',
 };
 
 /** Whether a component's picture takes a colour range (fringes and materials do not). */
@@ -46,4 +49,30 @@ export function rangeParam(s) {
     return `${-a},${a}`;
   }
   return `${parseNumber(s.lo)},${parseNumber(s.hi)}`;
+}
+
+/** Key of the plane a snapshot samples (a 3D run's slice; '' for a 2D snapshot). */
+export function sliceKey(snap) {
+  const s = snap && snap.slice;
+  return s && s.normal ? `${s.normal}@${s.at}` : '';
+}
+
+/** A length in mm for a label: `2.0`, `2.5`, `12.75` (at least one decimal). */
+function mm(m) {
+  const v = Number(m) * 1e3;
+  if (!Number.isFinite(v)) return '–';
+  const r = Number(v.toPrecision(4));
+  return Number.isInteger(r) ? r.toFixed(1) : String(r);
+}
+
+/**
+ * The label of a 3D run's slice, e.g. `slice z = 2.0 mm (x–y plane)`, with the node plane
+ * sampled when it is not the one asked for; '' for a 2D snapshot.
+ */
+export function sliceLabel(snap) {
+  const s = snap && snap.slice;
+  if (!s || !s.normal) return '';
+  const axes = Array.isArray(s.axes) && s.axes.length === 2 ? ` (${s.axes[0]}–${s.axes[1]} plane)` : '';
+  const node = Number.isFinite(Number(s.node_at)) && mm(s.node_at) !== mm(s.at) ? `, nodes at ${s.normal} = ${mm(s.node_at)} mm` : '';
+  return `slice ${s.normal} = ${mm(s.at)} mm${axes}${node}`;
 }

@@ -2,7 +2,7 @@
 // results tables, plot file names and the guide renderer: `node --test web/test/`.
 import { test } from 'node:test';
 import assert from 'node:assert/strict';
-import { rangeParam, rangeProblem, rangeApplies, parseNumber, COMPONENT_UNITS } from '../js/fields.js';
+import { rangeParam, rangeProblem, rangeApplies, parseNumber, COMPONENT_UNITS, sliceKey, sliceLabel } from '../js/fields.js';
 import { tipTable, referenceRows, scaled } from '../js/results.js';
 import { slug, plotFileName, legendLayout } from '../js/download.js';
 import { renderMarkdown, inline, linkTarget, headingId, escapeHtml } from '../js/markdown.js';
@@ -180,4 +180,17 @@ test('guides: Markdown to escaped HTML with dashboard links', () => {
   assert.equal(headingId('The `grid` (box)'), 'the-grid-box');
   assert.equal(inline('a_b_c and _x_'), 'a_b_c and <em>x</em>');
   assert.equal(escapeHtml('<"&\'>'), '&lt;&quot;&amp;&#39;&gt;');
+});
+
+test('a 3D snapshot is labelled with its plane; a 2D one has no plane', () => {
+  const z = { index: 0, slice: { normal: 'z', at: 0.002, node_at: 0.002, axes: ['x', 'y'] } };
+  const y = { index: 1, slice: { normal: 'y', at: 0.0125, node_at: 0.012, axes: ['x', 'z'] } };
+  assert.equal(sliceLabel(z), 'slice z = 2.0 mm (x–y plane)');
+  assert.equal(sliceLabel(y), 'slice y = 12.5 mm (x–z plane), nodes at y = 12.0 mm');
+  assert.notEqual(sliceKey(z), sliceKey(y));
+  assert.equal(sliceKey({ ...z, index: 2 }), sliceKey(z));
+  assert.equal(sliceKey({ index: 0 }), '');
+  assert.equal(sliceLabel({ index: 0 }), '');
+  assert.equal(COMPONENT_UNITS.syz, 'Pa');
+  assert.equal(COMPONENT_UNITS.vz, 'm/s');
 });

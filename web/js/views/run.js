@@ -2,18 +2,21 @@
 // speed (with wave-speed reference lines), position/length, J, K and the energy balance;
 // field snapshots with a time slider and a colour-range control; the results summary (per
 // tip, and against the scene's references); the crack-path picture; summary, scene,
-// downloads, cancel/delete; a note when the run was restarted from a checkpoint.
+// downloads, cancel/delete; a note when the run was restarted from a checkpoint. A 3D run
+// (`"analysis": "3d"`) has no crack tips: its page shows the energy balance and its slices
+// (each snapshot a plane of the grid, chosen with the slice selector and named under the
+// picture).
 
 import * as api from '../api.js';
 import { Plot, PALETTE, DASHES } from '../plot.js';
 import { sceneWaveSpeeds, speedRefLines } from '../waves.js';
 import { h, replace, num, si, count, duration, timeEl, timeUnit, statusBadge, saveBlob, notify, prettyJson, orderScene, etaText, tipLabel, cacheNote } from '../util.js';
 import { wallTime, labelChips } from './runs.js';
-import { COMPONENT_UNITS, rangeApplies, rangeParam, rangeProblem } from '../fields.js';
+import { COMPONENT_UNITS, rangeApplies, rangeParam, rangeProblem, sliceKey, sliceLabel } from '../fields.js';
 import { tipTable, referenceRows } from '../results.js';
 
 const TERMINAL = new Set(['completed', 'failed', 'cancelled']);
-const COMPONENT_ORDER = ['fringe', 'sxx', 'syy', 'sxy', 'von_mises', 'speed', 'vx', 'vy', 'ux', 'uy', 'exx', 'eyy', 'exy', 'material'];
+const COMPONENT_ORDER = ['fringe', 'sxx', 'syy', 'szz', 'sxy', 'syz', 'sxz', 'von_mises', 'speed', 'vx', 'vy', 'vz', 'ux', 'uy', 'uz', 'exx', 'eyy', 'ezz', 'exy', 'eyz', 'exz', 'material'];
 const KIND_COMPONENTS = {
   stress: ['sxx', 'syy', 'sxy'], strain: ['exx', 'eyy', 'exy'], velocity: ['vx', 'vy', 'speed'],
   displacement: ['ux', 'uy'], fringe: ['fringe'], material: ['material'],
@@ -21,6 +24,7 @@ const KIND_COMPONENTS = {
 const COMPONENT_NAMES = {
   fringe: 'Isochromatic fringes', sxx: 'σxx', syy: 'σyy', sxy: 'σxy', speed: 'Velocity magnitude', vx: 'vx', vy: 'vy',
   ux: 'ux', uy: 'uy', exx: 'εxx', eyy: 'εyy', exy: 'εxy', material: 'Material', von_mises: 'von Mises stress', umag: 'Displacement magnitude',
+  szz: 'σzz', syz: 'σyz', sxz: 'σxz', vz: 'vz', uz: 'uz', ezz: 'εzz', eyz: 'εyz', exz: 'εxz',
 };
 
 /** Rows from an SSE payload or API answer: an array, one row, or {rows|items|data: [...]}. */
@@ -103,6 +107,15 @@ export function runView(main, { id }) {
   const energyCols = [['kinetic', 'kinetic'], ['strain', 'strain'], ['external_work', 'external work'], ['dissipated', 'dissipated'], ['total_error', 'error (balance)']];
   energyCols.forEach(([k, name], i) => ePlot.ensure(k, { name, color: PALETTE[i], dash: k === 'total_error' ? DASHES[1] : '' }));
 
+  /** Whether the run is 3D (its scene's `analysis`, or its summary's `dimension`). */
+  const is3d = () => !!job && ((job.scene && job.scene.analysis === '3d') || (job.summary && Number(job.summary.dimension) === 3));
+  /** A 3D run has no crack tips (run-output.md): its tip plots are hidden, its energy plot stays. */
+  function applyDimension() {
+    const three = is3d();
+    for (const p of [speedPlot, posPlot, jPlot, kPlot]) p.root.hidden = three;
+    plotGrid.dataset.dimension = three ? '3' : '2';
+  }
+
   function addTipRows(rows) {
     let changed = false;
     for (const r of rows) {
@@ -175,6 +188,7 @@ export function runView(main, { id }) {
   function renderHeader() {
     titleEl.textContent = job.name || job.id;
     document.title = `${job.name || job.id} · mpm-fracture`;
+    applyDimension();
     replace(badgeHost, statusBadge(job.status));
     const running = job.status === 'running' || job.status === 'queued';
     replace(actions,
@@ -303,6 +317,7 @@ export function runView(main, { id }) {
     if (s) {
       rows.push(
         meta('Outcome', h('span', {}, statusBadge(s.status), s.message ? ` ${s.message}` : '')),
+        Number(s.dimension) === 3 ? meta('Dimension', h('span', { id: 'summary-dimension' }, '3D')) : null,
         meta('Steps', count(s.steps)),
         meta('Time step', si(s.time_step, 's')),
         meta('Simulated time', si(s.sim_time, 's')),
@@ -402,6 +417,13 @@ export function runView(main, { id }) {
 
   // ---- snapshots ------------------------------------------------------------------------
   const compSel = h('select', { id: 'snap-component' });
+  // A 3D run's snapshots are slices: one picture per plane per snapshot time. The slider
+  // runs over the times of the chosen plane.
+  const sliceSel = h('select', { id: 'snap-slice' });
+  const sliceField = h('div', { class: 'field', hidden: true }, h('label', { for: 'snap-slice' }, 'Slice'), sliceSel);
+  const sliceCaption = h('figcaption', { id: 'snap-slice-label', class: 'muted small-text', hidden: true });
+  /** The snapshots the slider runs over: those of the chosen slice (all of a 2D run). */
+  const frames = () => snapshots.filter((s) => sliceKey(s) === sliceSel.value);
   const slider = h('input', { id: 'snap-slider', type: 'range', min: 0, max: 0, step: 1, value: 0 });
   const timeOut = h('output', { for: 'snap-slider', class: 'mono' }, '–');
   const playBtn = h('button', { type: 'button', id: 'snap-play', 'aria-pressed': 'false' }, '▶ Play');
@@ -421,7 +443,8 @@ export function runView(main, { id }) {
   const rangeField = h('div', { class: 'field snap-range' }, h('label', { for: 'snap-range-mode' }, 'Colour range'),
     h('div', { class: 'row' }, rangeMode, h('span', { class: 'range-sym' }, '±', rangeAbs), h('span', { class: 'range-man' }, rangeLo, '–', rangeHi), rangeUnit), rangeMsg);
   const currentComponent = () => {
-    const s = snapshots[Math.min(Number(slider.value), snapshots.length - 1)];
+    const f = frames();
+    const s = f[Math.min(Number(slider.value), f.length - 1)];
     const c = compSel.value;
     return s && !snapshotComponents(s).includes(c) ? snapshotComponents(s)[0] : c;
   };
@@ -460,18 +483,32 @@ export function runView(main, { id }) {
   const pictureOpts = (comp = currentComponent()) => ({ px_per_cell: ppcSel.value, range: rangeApplies(comp) ? rangeParam(rangeOf(comp)) : '' });
   const img = h('img', { id: 'snap-image', class: 'snap-image', alt: '', hidden: true });
   const snapEmpty = h('p', { class: 'muted' }, 'No field snapshots yet.');
+  const snapTitle = h('h2', { id: 'snap-h' }, 'Field snapshots');
   let following = true; // slider follows the newest snapshot while live
-  replace(snapHost, h('h2', { id: 'snap-h' }, 'Field snapshots'),
+  replace(snapHost, snapTitle,
     h('div', { class: 'snap-controls' },
+      sliceField,
       h('div', { class: 'field' }, h('label', { for: 'snap-component' }, 'Field'), compSel),
       h('div', { class: 'field grow' }, h('label', { for: 'snap-slider' }, 'Time ', timeOut), slider),
       h('div', { class: 'field' }, h('label', { for: 'snap-ppc' }, 'Resolution'), ppcSel),
       rangeField,
       playBtn),
-    h('figure', { class: 'snap' }, img, snapEmpty), snapNote);
+    h('figure', { class: 'snap' }, img, sliceCaption, snapEmpty), snapNote);
   compSel.addEventListener('change', () => { syncRangeInputs(); showSnapshot(); });
+  sliceSel.addEventListener('change', () => {
+    // stay at the same time on the other plane
+    const shown = img.dataset.time === undefined ? NaN : Number(img.dataset.time);
+    const f = frames();
+    let best = f.length - 1;
+    if (Number.isFinite(shown)) f.forEach((s, i) => { if (Math.abs(s.time - shown) < Math.abs(f[best].time - shown)) best = i; });
+    slider.max = String(Math.max(0, f.length - 1));
+    slider.value = String(Math.max(0, best));
+    following = best === f.length - 1;
+    stop();
+    showSnapshot();
+  });
   ppcSel.addEventListener('change', showSnapshot);
-  slider.addEventListener('input', () => { following = Number(slider.value) === snapshots.length - 1; stop(); showSnapshot(); });
+  slider.addEventListener('input', () => { following = Number(slider.value) === frames().length - 1; stop(); showSnapshot(); });
   playBtn.addEventListener('click', () => (playTimer ? stop() : play()));
 
   function addSnapshots(list) {
@@ -483,6 +520,16 @@ export function runView(main, { id }) {
     }
     if (!added) return;
     snapshots.sort((a, b) => a.index - b.index);
+    // the planes of a 3D run, in the order the run writes them
+    const planes = [];
+    for (const s of snapshots) if (sliceKey(s) && !planes.some((p) => p.key === sliceKey(s))) planes.push({ key: sliceKey(s), snap: s });
+    if (planes.length && sliceSel.options.length !== planes.length) {
+      const was = sliceSel.value;
+      replace(sliceSel, planes.map((p) => h('option', { value: p.key }, sliceLabel(p.snap).replace(/^slice /, ''))));
+      sliceSel.value = planes.some((p) => p.key === was) ? was : planes[0].key;
+      sliceField.hidden = false;
+      snapTitle.textContent = 'Field slices';
+    }
     const comps = new Set();
     for (const s of snapshots) for (const c of snapshotComponents(s)) comps.add(c);
     const cur = compSel.value;
@@ -491,14 +538,15 @@ export function runView(main, { id }) {
       replace(compSel, ordered.map((c) => h('option', { value: c }, COMPONENT_NAMES[c] || c)));
       compSel.value = ordered.includes(cur) ? cur : ordered[0];
     }
-    slider.max = String(snapshots.length - 1);
-    if (following) slider.value = String(snapshots.length - 1);
+    slider.max = String(Math.max(0, frames().length - 1));
+    if (following) slider.value = String(Math.max(0, frames().length - 1));
     showSnapshot();
   }
 
   function showSnapshot() {
-    if (!snapshots.length) return;
-    const s = snapshots[Math.min(Number(slider.value), snapshots.length - 1)];
+    const f = frames();
+    if (!f.length) return;
+    const s = f[Math.min(Number(slider.value), f.length - 1)];
     let comp = compSel.value;
     if (!snapshotComponents(s).includes(comp)) comp = snapshotComponents(s)[0];
     if (!comp) return;
@@ -506,14 +554,21 @@ export function runView(main, { id }) {
     if (rangeField.hidden === rangeApplies(comp)) syncRangeInputs();
     img.dataset.range = pictureOpts(comp).range;
     showReport(s, comp);
-    timeOut.textContent = `${si(s.time, 's')} (${Number(slider.value) + 1}/${snapshots.length})`;
-    slider.setAttribute('aria-valuetext', `t = ${si(s.time, 's')}, snapshot ${Number(slider.value) + 1} of ${snapshots.length}`);
+    timeOut.textContent = `${si(s.time, 's')} (${Number(slider.value) + 1}/${f.length})`;
+    slider.setAttribute('aria-valuetext', `t = ${si(s.time, 's')}, snapshot ${Number(slider.value) + 1} of ${f.length}`);
+    const plane = sliceLabel(s);
+    sliceCaption.textContent = plane;
+    sliceCaption.hidden = !plane;
+    img.dataset.time = String(s.time);
+    img.dataset.slice = sliceKey(s);
     if (img.dataset.src !== url) {
       img.dataset.src = url;
       img.src = url;
       trackPicture(img);
     }
-    img.alt = `${COMPONENT_NAMES[comp] || comp} at t = ${si(s.time, 's')}, with its colour scale and the crack path`;
+    img.alt = plane
+      ? `${COMPONENT_NAMES[comp] || comp} at t = ${si(s.time, 's')} on the ${plane}, with its colour scale`
+      : `${COMPONENT_NAMES[comp] || comp} at t = ${si(s.time, 's')}, with its colour scale and the crack path`;
     img.hidden = false;
     snapEmpty.hidden = true;
   }
@@ -536,14 +591,15 @@ export function runView(main, { id }) {
   }
 
   function play() {
-    if (snapshots.length < 2) return;
-    if (Number(slider.value) >= snapshots.length - 1) slider.value = '0';
+    const f = frames();
+    if (f.length < 2) return;
+    if (Number(slider.value) >= f.length - 1) slider.value = '0';
     playBtn.textContent = '❚❚ Pause';
     playBtn.setAttribute('aria-pressed', 'true');
     following = false;
     const step = () => {
       const i = Number(slider.value) + 1;
-      if (i >= snapshots.length) { stop(); following = true; return; }
+      if (i >= f.length) { stop(); following = true; return; }
       // advance once the current image is there, so playback never shows a blank frame
       const next = new Image();
       next.onload = next.onerror = () => {
@@ -553,8 +609,8 @@ export function runView(main, { id }) {
         playTimer = setTimeout(step, 500);
       };
       trackPicture(next);
-      const c = snapshotComponents(snapshots[i]).includes(compSel.value) ? compSel.value : snapshotComponents(snapshots[i])[0];
-      next.src = api.snapshotUrl(id, snapshots[i].index, c, pictureOpts(c));
+      const c = snapshotComponents(f[i]).includes(compSel.value) ? compSel.value : snapshotComponents(f[i])[0];
+      next.src = api.snapshotUrl(id, f[i].index, c, pictureOpts(c));
     };
     playTimer = setTimeout(step, 300);
   }
