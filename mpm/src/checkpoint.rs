@@ -1,4 +1,4 @@
-//! Checkpoints of the core: the [`State`](crate::State) as bytes and back. A checkpoint is
+//! Checkpoints of the core: the [`State`] as bytes and back. A checkpoint is
 //! the state — particles, sort order and strip bounds, time, steps, energy ledger — and
 //! nothing else: the model is rebuilt from the scene, scratch by the next step.
 //!
