@@ -157,6 +157,7 @@ pub fn floor_both(x: f64) -> (f64, i32) {
 #[cfg(test)]
 mod tests {
     use super::*;
+    use proptest::prelude::*;
 
     #[test]
     fn portable_rounds_twice_fma_once() {
@@ -176,5 +177,38 @@ mod tests {
     fn detect_picks_an_available_kernel() {
         assert!(Kernel::detect().available());
         assert!(Kernel::Portable.available());
+    }
+
+    #[test]
+    fn floor_i64_matches_floor_cast_at_the_edges() {
+        for x in [
+            0.0,
+            -0.0,
+            0.5,
+            -0.5,
+            -1.0,
+            1.0 - f64::EPSILON,
+            -f64::MIN_POSITIVE,
+            4_503_599_627_370_495.5,
+            -4_503_599_627_370_495.5,
+            9.3e18,
+            -9.3e18,
+            9_223_372_036_854_775_807.0,
+            -9_223_372_036_854_775_808.0,
+            f64::MAX,
+            f64::MIN,
+            f64::INFINITY,
+            f64::NEG_INFINITY,
+            f64::NAN,
+        ] {
+            assert_eq!(floor_i64(x), x.floor() as i64, "x = {x:e}");
+        }
+    }
+
+    proptest! {
+        #[test]
+        fn floor_i64_is_floor(x in proptest::num::f64::ANY) {
+            prop_assert_eq!(floor_i64(x), x.floor() as i64);
+        }
     }
 }

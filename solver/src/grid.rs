@@ -120,19 +120,7 @@ impl GridGeom {
     }
 }
 
-/// `x.floor() as i64` for every x (NaN gives 0, out-of-range values saturate) without the
-/// out-of-line libm `floor` of baseline x86-64: the truncating cast, one down where it
-/// rounded up (negative non-integers). Exact: truncation of a finite f64 is an integer that
-/// converts back exactly, and |x| ≥ 2⁵² is already an integer.
-#[inline(always)]
-pub fn floor_i64(x: f64) -> i64 {
-    let i = x as i64;
-    if (i as f64) > x {
-        i.saturating_sub(1)
-    } else {
-        i
-    }
-}
+pub use fracture_mpm::math::floor_i64;
 
 /// Mutable view of a contiguous range of grid storage and of the field-1 nodes inside it.
 pub struct GridMut<'a> {
@@ -343,43 +331,4 @@ where
         || recurse(geom, bounds, colour, mid, k1, pr, pbase + pcut, gr, f),
     );
     a.merge(b)
-}
-
-#[cfg(test)]
-mod tests {
-    use super::floor_i64;
-    use proptest::prelude::*;
-
-    #[test]
-    fn floor_i64_matches_floor_cast_at_the_edges() {
-        for x in [
-            0.0,
-            -0.0,
-            0.5,
-            -0.5,
-            -1.0,
-            1.0 - f64::EPSILON,
-            -f64::MIN_POSITIVE,
-            4_503_599_627_370_495.5,
-            -4_503_599_627_370_495.5,
-            9.3e18,
-            -9.3e18,
-            9_223_372_036_854_775_807.0,
-            -9_223_372_036_854_775_808.0,
-            f64::MAX,
-            f64::MIN,
-            f64::INFINITY,
-            f64::NEG_INFINITY,
-            f64::NAN,
-        ] {
-            assert_eq!(floor_i64(x), x.floor() as i64, "x = {x:e}");
-        }
-    }
-
-    proptest! {
-        #[test]
-        fn floor_i64_is_floor(x in proptest::num::f64::ANY) {
-            prop_assert_eq!(floor_i64(x), x.floor() as i64);
-        }
-    }
 }

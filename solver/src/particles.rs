@@ -2,40 +2,17 @@
 //! and cold metadata. Kept sorted by cell (column-major) so that the scatter to the grid is
 //! a strip-coloured parallel loop (see `sim`).
 
-/// Position and velocity.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Kin {
-    /// Position (m).
-    pub x: [f64; 2],
-    /// Velocity (m/s).
-    pub v: [f64; 2],
-}
+use fracture_mpm::Dim2;
 
-/// Per-particle mechanical data.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Mech {
-    /// Mass (kg, per the scene's thickness).
-    pub m: f64,
-    /// Volume (m³, per the scene's thickness), undeformed.
-    pub vol: f64,
-    /// Half-width l in cell units (h/(2·ppc)/h).
-    pub lh: f64,
-    /// Material index.
-    pub mat: u32,
-    /// 1 + index of the load acting on the particle, 0 for none.
-    pub load: u32,
-}
+/// Position and velocity (the core's [`fracture_mpm::particles::Kin`] in 2D).
+pub type Kin = fracture_mpm::particles::Kin<Dim2>;
 
-/// Cold metadata, read for output and diagnostics only.
-#[derive(Debug, Clone, Copy, Default, PartialEq, serde::Serialize, serde::Deserialize)]
-pub struct Cold {
-    /// Initial position (m), for displacements.
-    pub x0: [f64; 2],
-    /// Index of the particle in creation order (stable across re-sorting).
-    pub id: u32,
-    /// Body index.
-    pub body: u32,
-}
+/// Per-particle mechanical data (the core's).
+pub use fracture_mpm::particles::Mech;
+
+/// Cold metadata, read for output and diagnostics only (the core's
+/// [`fracture_mpm::particles::Cold`] in 2D).
+pub type Cold = fracture_mpm::particles::Cold<Dim2>;
 
 /// All particles.
 #[derive(Debug, Clone, Default, serde::Serialize, serde::Deserialize)]

@@ -7,16 +7,7 @@
 
 use fracture_api::scene::ShapeFunction;
 
-/// 1D weights of one particle: nodes `base`, `base+1`, `base+2`.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct Weights1 {
-    /// Index of the first node.
-    pub base: i32,
-    /// Shape function values.
-    pub s: [f64; 3],
-    /// Derivatives dS/dξ (divide by h for dS/dx).
-    pub ds: [f64; 3],
-}
+pub use fracture_mpm::shape::{CachedW1, Weights1};
 
 /// Uniform GIMP weight and its derivative for the signed distance `d` (cell units) between
 /// particle and node, with particle half-width `l` (cell units, 0 < l ≤ ½).
@@ -63,79 +54,20 @@ pub fn fast_floor(x: f64) -> f64 {
     if r > x { r - 1.0 } else { r }
 }
 
-/// floor(x) as a float and as an integer, for |x| < 2³¹: the low 32 bits of x + 1.5·2⁵²
-/// hold round(x) (a saturating `as i32` cast costs a dozen instructions).
-#[inline(always)]
-fn floor_both(x: f64) -> (f64, i32) {
-    const MAGIC: f64 = 6_755_399_441_055_744.0;
-    let t = x + MAGIC;
-    let r = t - MAGIC;
-    let i = t.to_bits() as u32 as i32;
-    if r > x { (r - 1.0, i - 1) } else { (r, i) }
-}
-
-/// 1D weights at ξ (cell units from the grid origin).
+/// 1D weights at ξ (cell units from the grid origin): the core's
+/// [`fracture_mpm::shape::weights_1d`] with q = 1/(4l).
 #[inline(always)]
 pub fn weights_1d(kind: ShapeFunction, xi: f64, l: f64) -> Weights1 {
-    let (cell, icell) = floor_both(xi);
-    match kind {
-        ShapeFunction::Gimp => gimp_1d(cell, icell, xi, l, 0.25 / l),
-        ShapeFunction::Linear => {
-            let f = xi - cell;
-            Weights1 {
-                base: icell,
-                s: [1.0 - f, f, 0.0],
-                ds: [-1.0, 1.0, 0.0],
-            }
-        }
-    }
+    fracture_mpm::shape::weights_1d(kind, xi, l, 0.25 / l)
 }
 
 /// GIMP 1D weights at ξ with half-width `l` and `q` = 1/(4l) supplied (the hot loops keep it
-/// across particles of equal size instead of dividing per particle).
+/// across particles of equal size instead of dividing per particle). A particle reaching only
+/// two nodes has its empty node last (the core's stencil base rule), which `Field0` in
+/// `sim/stencil.rs` relies on.
 #[inline(always)]
 pub fn gimp_weights_1d(xi: f64, l: f64, q: f64) -> Weights1 {
-    let (cell, icell) = floor_both(xi);
-    gimp_1d(cell, icell, xi, l, q)
-}
-
-#[inline(always)]
-fn gimp_1d(cell: f64, icell: i32, xi: f64, l: f64, q: f64) -> Weights1 {
-    let f = xi - cell;
-    // A particle reaches node cell−1 only when f < l and node cell+2 only when f > 1 − l
-    // (l ≤ ½ means never both). The stencil starts at cell−1 in the first case and at cell
-    // otherwise, so a particle that reaches only two nodes (l ≤ f ≤ 1 − l) has them first and
-    // its empty node last: the hot loops skip the last column and row when their weight is 0
-    // (`Field0` in `sim/stencil.rs`). With u the offset from the middle node (|u| < 1),
-    // the outer weights are the GIMP branches written out for that range, and the middle
-    // weight follows from Σ S = 1 (equal to the branch formula: see
-    // `fast_weights_match_reference`).
-    let (base, u) = if f < l {
-        (icell - 1, f)
-    } else {
-        (icell, f - 1.0)
-    };
-    let (sl, dl) = if u <= -l {
-        (-u, -1.0)
-    } else if u < l {
-        let r = l - u;
-        (q * r * r, -2.0 * q * r)
-    } else {
-        (0.0, 0.0)
-    };
-    let (sr, dr) = if u >= l {
-        (u, 1.0)
-    } else if u > -l {
-        let r = l + u;
-        (q * r * r, 2.0 * q * r)
-    } else {
-        (0.0, 0.0)
-    };
-    Weights1 {
-        base,
-        s: [sl, 1.0 - sl - sr, sr],
-        ds: [dl, -dl - dr, dr],
-    }
+    fracture_mpm::shape::weights_1d(ShapeFunction::Gimp, xi, l, q)
 }
 
 /// 2D weights of one particle: 3×3 nodes starting at `(bx, by)`.
@@ -168,17 +100,6 @@ impl Weights2 {
     }
 }
 
-/// One direction of [`CachedW2`]: the stencil base and the outer two nodes' S and dS/dξ.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct CachedW1 {
-    /// Index of the first node.
-    pub base: i32,
-    /// S of the first and last node.
-    pub s: [f32; 2],
-    /// dS/dξ of the first and last node.
-    pub ds: [f32; 2],
-}
-
 /// The shape-function weights a particle's P2G caches for the step's later passes
 /// (`algorithm.md` §2 allows cached per-step quantities in f32): per direction the base and
 /// the outer nodes' S and S' rounded to f32; the middle node follows from Σ S = 1 and
@@ -190,27 +111,6 @@ pub struct CachedW2 {
     pub x: CachedW1,
     /// y.
     pub y: CachedW1,
-}
-
-impl CachedW1 {
-    #[inline(always)]
-    fn pack(w: &Weights1) -> CachedW1 {
-        CachedW1 {
-            base: w.base,
-            s: [w.s[0] as f32, w.s[2] as f32],
-            ds: [w.ds[0] as f32, w.ds[2] as f32],
-        }
-    }
-    #[inline(always)]
-    fn unpack(&self) -> Weights1 {
-        let (s0, s2) = (f64::from(self.s[0]), f64::from(self.s[1]));
-        let (d0, d2) = (f64::from(self.ds[0]), f64::from(self.ds[1]));
-        Weights1 {
-            base: self.base,
-            s: [s0, 1.0 - s0 - s2, s2],
-            ds: [d0, -d0 - d2, d2],
-        }
-    }
 }
 
 impl CachedW2 {
