@@ -10,7 +10,7 @@
 //! parallel, then the odd strips: every node receives its contributions in the same order
 //! whatever the number of threads, so results are bitwise reproducible.
 
-use crate::dim::Dim;
+use crate::dim::{Dim, Dim2};
 use crate::math::floor_i64;
 
 /// Cell planes per strip.
@@ -29,6 +29,9 @@ pub struct Node<D: Dim> {
     pub f: D::V,
     /// Momentum re-extrapolated from the updated particle velocities.
     pub q: D::V,
+    /// Mass-weighted particle displacement Σ S m (x − X), for crack contact (zero where no
+    /// crack needs it).
+    pub u: D::V,
     /// Velocity of the current gather (p/m, then q/m), 0 on empty nodes.
     pub v: D::V,
     /// Acceleration f/m after the force stage, 0 on empty nodes.
@@ -152,29 +155,117 @@ impl<D: Dim> GridGeom<D> {
     }
 }
 
-/// Mutable view of a contiguous range of grid storage.
+/// The 2D grid's node-pair accessors (the crack layer of the 2D solver addresses nodes as
+/// (column, row)).
+impl GridGeom<Dim2> {
+    /// Nodes in x.
+    #[inline(always)]
+    pub fn nx(&self) -> usize {
+        self.n[0]
+    }
+    /// Nodes in y.
+    #[inline(always)]
+    pub fn ny(&self) -> usize {
+        self.n[1]
+    }
+    /// Storage index of node (ix, iy): `(ix + PAD)·ny + iy`.
+    #[inline(always)]
+    pub fn at(&self, ix: usize, iy: usize) -> usize {
+        (ix + PAD) * self.n[1] + iy
+    }
+    /// Node (ix, iy) of a storage index.
+    #[inline(always)]
+    pub fn node_xy(&self, index: usize) -> (usize, usize) {
+        (index / self.n[1] - PAD, index % self.n[1])
+    }
+    /// Position of node (ix, iy).
+    #[inline(always)]
+    pub fn pos(&self, ix: usize, iy: usize) -> [f64; 2] {
+        [
+            self.origin[0] + ix as f64 * self.h,
+            self.origin[1] + iy as f64 * self.h,
+        ]
+    }
+    /// Cell (column, row) containing x (may be out of range).
+    #[inline(always)]
+    pub fn cell_xy(&self, x: [f64; 2]) -> (i64, i64) {
+        let xi = self.xi(&x);
+        (floor_i64(xi[0]), floor_i64(xi[1]))
+    }
+    /// The cell whose four nodes all lie on the grid and contain x, as (column, row) and
+    /// x's bilinear fractions (f_x, f_y) in it; None outside.
+    pub fn cell_with_fractions(&self, x: [f64; 2]) -> Option<(usize, usize, f64, f64)> {
+        let xi = self.xi(&x);
+        let (cx, cy) = (xi[0].floor(), xi[1].floor());
+        if cx < 0.0 || cy < 0.0 || cx as usize + 1 >= self.n[0] || cy as usize + 1 >= self.n[1] {
+            return None;
+        }
+        Some((cx as usize, cy as usize, xi[0] - cx, xi[1] - cy))
+    }
+}
+
+/// Mutable view of a contiguous range of grid storage and of the extra-field nodes inside it
+/// (the second velocity field at nodes a crack cuts; empty without cracks).
 pub struct GridMut<'a, D: Dim> {
-    /// Nodes of storage indices `[base, base + nodes.len())`.
+    /// Field-0 nodes of storage indices `[base, base + nodes.len())`.
     pub nodes: &'a mut [Node<D>],
     /// Storage index of `nodes[0]`.
     pub base: usize,
+    /// Field-1 nodes whose storage index lies in the range, in storage order.
+    pub f1: &'a mut [Node<D>],
+    /// Their storage indices (same length as `f1`).
+    pub f1_index: &'a [u32],
+    /// Slot number of `f1[0]` in the whole field-1 table.
+    pub f1_base: usize,
 }
 
 impl<'a, D: Dim> GridMut<'a, D> {
+    /// A view of the whole storage `nodes` with no field-1 nodes.
+    pub fn single(nodes: &'a mut [Node<D>]) -> Self {
+        GridMut {
+            nodes,
+            base: 0,
+            f1: &mut [],
+            f1_index: &[],
+            f1_base: 0,
+        }
+    }
+
     /// Split at storage index `at` (absolute).
     pub fn split_at(self, at: usize) -> (GridMut<'a, D>, GridMut<'a, D>) {
         let cut = at.clamp(self.base, self.base + self.nodes.len()) - self.base;
         let (n0, n1) = self.nodes.split_at_mut(cut);
+        let k = self.f1_index.partition_point(|&i| (i as usize) < at);
+        let (f0, f1) = self.f1.split_at_mut(k);
+        let (i0, i1) = self.f1_index.split_at(k);
         (
             GridMut {
                 nodes: n0,
                 base: self.base,
+                f1: f0,
+                f1_index: i0,
+                f1_base: self.f1_base,
             },
             GridMut {
                 nodes: n1,
                 base: self.base + cut,
+                f1,
+                f1_index: i1,
+                f1_base: self.f1_base + k,
             },
         )
+    }
+
+    /// The node of field `field` at storage index `index` (which must be in range; field-1
+    /// nodes are looked up through the dense slot map `slot_of`).
+    #[inline(always)]
+    pub fn node(&mut self, index: usize, field: u8, slot_of: &[u32]) -> &mut Node<D> {
+        if field == 0 {
+            &mut self.nodes[index - self.base]
+        } else {
+            let slot = slot_of[index] as usize;
+            &mut self.f1[slot - self.f1_base]
+        }
     }
 }
 
@@ -198,6 +289,10 @@ impl<D: Dim> SplitGrid for (GridMut<'_, D>, GridMut<'_, D>) {
         let (b0, b1) = self.1.split_at(at);
         ((a0, b0), (a1, b1))
     }
+}
+
+impl Reduce for () {
+    fn merge(self, _: Self) -> Self {}
 }
 
 impl<A: Reduce, B: Reduce> Reduce for (A, B) {

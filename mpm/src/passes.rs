@@ -163,10 +163,7 @@ where
     let mut out = Acc::default();
     let bounds = &st.strip_bounds;
     for colour in 0..2 {
-        let grid = GridMut {
-            nodes: &mut sc.nodes,
-            base: 0,
-        };
+        let grid = GridMut::single(&mut sc.nodes);
         let parts = PartsMut::new(&mut st.parts);
         let a: Acc = for_strips(&geom, bounds, colour, parts, grid, &|s, p, g| {
             f(s, bounds[s], p, g)
@@ -513,14 +510,8 @@ fn strain_p2g_k<A: Arith, D: Dim>(
     let bounds = &st.strip_bounds;
     let mut out = (Acc::default(), Acc::default());
     for colour in 0..2 {
-        let cur = GridMut {
-            nodes: &mut sc.nodes,
-            base: 0,
-        };
-        let nxt = GridMut {
-            nodes: &mut sc.nodes_alt,
-            base: 0,
-        };
+        let cur = GridMut::single(&mut sc.nodes);
+        let nxt = GridMut::single(&mut sc.nodes_alt);
         let parts = PartsMut::new(&mut st.parts);
         let a: (Acc, Acc) = for_strips(&geom, bounds, colour, parts, (cur, nxt), &|s, p, g| {
             f(s, bounds[s], p, g)

@@ -51,7 +51,7 @@ fn field_of(
     .unwrap();
     let w = fracture_solver::shape::Weights2::new(
         fracture_api::scene::ShapeFunction::Gimp,
-        geom.xi(x),
+        geom.xi(&x),
         0.25,
     );
     let a = node.0 as i32 - w.x.base;
@@ -61,7 +61,7 @@ fn field_of(
         "node not in the particle's stencil"
     );
     let bit = ((fmask[0] >> (3 * a + b) as u32) & 1) as u8;
-    let idx = geom.index(node.0, node.1) as u32;
+    let idx = geom.at(node.0, node.1) as u32;
     let slot = f1.iter().position(|&i| i == idx).map(|s| c.slots[s]);
     (bit, slot)
 }

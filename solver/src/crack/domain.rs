@@ -165,9 +165,9 @@ pub(super) fn ring_fits(v: &View<'_>, tip: [f64; 2], r: f64) -> bool {
     }
     (0..32).all(|i| {
         let a = f64::from(i) * std::f64::consts::PI / 16.0;
-        let xi = g.xi([tip[0] + r * a.cos(), tip[1] + r * a.sin()]);
+        let xi = g.xi(&[tip[0] + r * a.cos(), tip[1] + r * a.sin()]);
         let (ix, iy) = (xi[0].round(), xi[1].round());
-        if ix < 1.0 || iy < 1.0 || ix + 1.0 >= g.nx as f64 || iy + 1.0 >= g.ny as f64 {
+        if ix < 1.0 || iy < 1.0 || ix + 1.0 >= g.nx() as f64 || iy + 1.0 >= g.ny() as f64 {
             return false;
         }
         let (ix, iy) = (ix as usize, iy as usize);
@@ -233,7 +233,7 @@ impl Cracks {
             })
         });
         let p = v.parts;
-        let xi_tip = g.xi(tip);
+        let xi_tip = g.xi(&tip);
         let reach = r_max / h + 3.0;
         let s_lo = ((xi_tip[0] - reach).max(0.0) as usize) / STRIP;
         let s_hi = (((xi_tip[0] + reach).max(0.0) as usize) / STRIP).min(g.strips - 1);
@@ -264,7 +264,7 @@ impl Cracks {
             let m = p.mech[i];
             let s = p.stress[i];
             let gu = p.grad_u[i];
-            let pxi = g.xi(k.x);
+            let pxi = g.xi(&k.x);
             let w = Weights2::new(v.shape, pxi, m.lh);
             let mask = if has_mask { p.fmask[i] } else { 0 };
             let (acc, gv) = v.own_field_rates(&w, mask);
@@ -279,7 +279,7 @@ impl Cracks {
                         }
                         let ix = (w.x.base + a as i32) as usize;
                         let iy = (w.y.base + b as i32) as usize;
-                        let idx = g.index(ix, iy);
+                        let idx = g.at(ix, iy);
                         if let Some(&slot) = v.slot_of.get(idx)
                             && slot != u32::MAX
                             && self
@@ -407,8 +407,8 @@ impl Cracks {
         // Crack-face traction term −Σ q t_i ∂u_i/∂x_k ds: the contact force on each side's
         // material (per the scene's thickness) with that side's nodal ∂u/∂x.
         for (slot, (idx, fnode)) in &face_nodes {
-            let (ix, iy) = g.node_of(*idx);
-            let x = g.node_pos(ix, iy);
+            let (ix, iy) = g.node_xy(*idx);
+            let x = g.pos(ix, iy);
             let r = (x[0] - tip[0]).hypot(x[1] - tip[1]);
             let Some(info) = self.slots.get(*slot as usize) else {
                 continue;

@@ -71,7 +71,7 @@ impl Cracks {
             if any_contact && self.contact_bodies.get(c.body as usize) == Some(&true) {
                 // A contact body's particle reaches all its nodes in field 1. The slots'
                 // normals come from the nodal masses (`Cracks::body_normals`).
-                let w = Weights2::new(shape, geom.xi(k.x), m.lh);
+                let w = Weights2::new(shape, geom.xi(&k.x), m.lh);
                 let mut mask = 0u16;
                 for a in 0..3 {
                     for b in 0..3 {
@@ -81,7 +81,7 @@ impl Cracks {
                         let ix = (w.x.base + a as i32) as usize;
                         let iy = (w.y.base + b as i32) as usize;
                         mask |= 1 << (3 * a + b);
-                        entries.push((geom.index(ix, iy) as u32, BODY_CONTACT, -1, [0.0, 0.0]));
+                        entries.push((geom.at(ix, iy) as u32, BODY_CONTACT, -1, [0.0, 0.0]));
                     }
                 }
                 fmask[i] = mask;
@@ -89,7 +89,7 @@ impl Cracks {
             }
             // Most particles lie outside the box of cells holding a segment, where
             // `segs_near` finds none (a NaN ξ is not outside and takes the full look-up).
-            let xi = geom.xi(k.x);
+            let xi = geom.xi(&k.x);
             let outside = seg_box
                 .is_none_or(|b| xi[0] < b[0] || xi[0] >= b[1] || xi[1] < b[2] || xi[1] >= b[3]);
             if outside {
@@ -118,7 +118,7 @@ impl Cracks {
                     p_left: left_d(a, d, k.x),
                 }
             }));
-            let w = Weights2::new(shape, geom.xi(k.x), m.lh);
+            let w = Weights2::new(shape, geom.xi(&k.x), m.lh);
             let mut mask = 0u16;
             for a in 0..3 {
                 if w.x.s[a] == 0.0 && w.x.ds[a] == 0.0 {
@@ -130,7 +130,7 @@ impl Cracks {
                     }
                     let ix = (w.x.base + a as i32) as usize;
                     let iy = (w.y.base + b as i32) as usize;
-                    let node = geom.node_pos(ix, iy);
+                    let node = geom.pos(ix, iy);
                     // Parity of crossings per crack; side and normal of the last crossing.
                     let mut hit: Option<(u32, u32, bool, [f64; 2])> = None;
                     let mut other_crack = false;
@@ -159,15 +159,10 @@ impl Cracks {
                         && count % 2 == 1
                     {
                         if other_crack {
-                            return Err((geom.index(ix, iy), 3));
+                            return Err((geom.at(ix, iy), 3));
                         }
                         mask |= 1 << (3 * a + b);
-                        entries.push((
-                            geom.index(ix, iy) as u32,
-                            ci,
-                            if above { 1 } else { -1 },
-                            n,
-                        ));
+                        entries.push((geom.at(ix, iy) as u32, ci, if above { 1 } else { -1 }, n));
                     }
                 }
             }

@@ -67,8 +67,8 @@ impl Cracks {
         self.cell_start.resize(ncx * ncy + 1, 0);
         let margin = 3.0 * self.h;
         let cells_of = |a: [f64; 2], b: [f64; 2]| {
-            let lo = geom.xi([a[0].min(b[0]) - margin, a[1].min(b[1]) - margin]);
-            let hi = geom.xi([a[0].max(b[0]) + margin, a[1].max(b[1]) + margin]);
+            let lo = geom.xi(&[a[0].min(b[0]) - margin, a[1].min(b[1]) - margin]);
+            let hi = geom.xi(&[a[0].max(b[0]) + margin, a[1].max(b[1]) + margin]);
             let cx0 = (lo[0].floor().max(0.0) as usize).min(ncx - 1);
             let cx1 = (hi[0].floor().max(0.0) as usize).min(ncx - 1);
             let cy0 = (lo[1].floor().max(0.0) as usize).min(ncy - 1);
@@ -115,7 +115,7 @@ impl Cracks {
 
     /// Segments registered in the cell containing `x`.
     pub(super) fn segs_near(&self, geom: &GridGeom, x: [f64; 2]) -> &[(u32, u32)] {
-        let (cx, cy) = geom.cell(x);
+        let (cx, cy) = geom.cell_xy(x);
         if cx < 0 || cy < 0 || cx as usize >= self.ncx || cy as usize >= self.ncy {
             return &[];
         }

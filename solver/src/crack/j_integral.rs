@@ -116,12 +116,12 @@ impl Cracks {
             JIntegral::Contour { cells } => i64::from(cells.max(1)),
             JIntegral::Domain { radius } => (radius / h).round().max(1.0) as i64,
         };
-        let xi = g.xi(tip);
+        let xi = g.xi(&tip);
         let (c0, r0) = (xi[0].round() as i64, xi[1].round() as i64);
         // Window of nodes around the contour.
         let (wx0, wy0) = (c0 - n - 1, r0 - n - 1);
         let wn = (2 * n + 3) as usize;
-        if wx0 < 0 || wy0 < 0 || wx0 as usize + wn > g.nx || wy0 as usize + wn > g.ny {
+        if wx0 < 0 || wy0 < 0 || wx0 as usize + wn > g.nx() || wy0 as usize + wn > g.ny() {
             // The contour leaves the grid: J is not defined (null in the output), never 0.
             return TipJ { j: [f64::NAN; 2] };
         }
@@ -139,7 +139,7 @@ impl Cracks {
         let has_mask = !p.fmask.is_empty();
         for i in range {
             let k = p.kin[i];
-            let pxi = g.xi(k.x);
+            let pxi = g.xi(&k.x);
             if pxi[0] < wx0 as f64 - 2.0
                 || pxi[1] < wy0 as f64 - 2.0
                 || pxi[0] > (wx0 + wn) as f64 + 1.0
@@ -225,7 +225,7 @@ impl Cracks {
         }
         let mut j = area;
         for (pn, qn, nrm) in edges {
-            let (pp, qp) = (g.node_pos(pn.0, pn.1), g.node_pos(qn.0, qn.1));
+            let (pp, qp) = (g.pos(pn.0, pn.1), g.pos(qn.0, qn.1));
             let fp = integrand(pn.0, pn.1, nrm);
             let fq = integrand(qn.0, qn.1, nrm);
             let cut = c

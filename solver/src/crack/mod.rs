@@ -489,8 +489,8 @@ impl Cracks {
             entries: Vec::new(),
             chunk_entries: Vec::new(),
             normal_impulse: vec![0.0; geom.storage_len()],
-            ncx: geom.nx - 1,
-            ncy: geom.ny - 1,
+            ncx: geom.nx() - 1,
+            ncy: geom.ny() - 1,
             j_evaluations: 0,
             media: mats
                 .iter()
@@ -655,7 +655,7 @@ impl View<'_> {
 
     #[inline(always)]
     fn node(&self, ix: usize, iy: usize, field: u8) -> Option<&Node> {
-        let idx = self.geom.index(ix, iy);
+        let idx = self.geom.at(ix, iy);
         if field == 0 {
             Some(&self.nodes[idx])
         } else {

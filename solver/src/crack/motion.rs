@@ -131,20 +131,16 @@ mod tests {
             serde_json::json!([{"points": [[0.0, y], [0.0105, y]]}]),
         );
         cracks.build_broad_phase(&geom);
-        let storage = geom.index(geom.nx - 1, geom.ny - 1) + 1;
+        let storage = geom.at(geom.nx() - 1, geom.ny() - 1) + 1;
         let (mut nodes, mut f1) = (
             vec![Node::default(); storage],
             vec![Node::default(); storage],
         );
         let mut slot_of = vec![u32::MAX; storage];
-        for ix in 0..geom.nx {
-            for iy in 0..geom.ny {
-                let i = geom.index(ix, iy);
-                let own = if geom.node_pos(ix, iy)[1] > y {
-                    1.0
-                } else {
-                    -1.0
-                };
+        for ix in 0..geom.nx() {
+            for iy in 0..geom.ny() {
+                let i = geom.at(ix, iy);
+                let own = if geom.pos(ix, iy)[1] > y { 1.0 } else { -1.0 };
                 nodes[i] = Node {
                     m: 1.0,
                     q: [own, 0.0],

@@ -128,7 +128,7 @@ fn displacement_at(v: &View<'_>, x: [f64; 2]) -> Option<[f64; 2]> {
     mass_weighted_at(
         v.geom,
         x,
-        |ix, iy| Some(&v.nodes[v.geom.index(ix, iy)]),
+        |ix, iy| Some(&v.nodes[v.geom.at(ix, iy)]),
         |n| n.u,
     )
 }
@@ -395,13 +395,13 @@ impl Cracks {
                     _ => ahead,
                 };
                 // Material ahead? If not, the crack has cut through: it becomes a mouth.
-                let xi = v.geom.xi(new);
+                let xi = v.geom.xi(&new);
                 let (ix, iy) = (xi[0].round(), xi[1].round());
                 let has_material = ix >= 1.0
                     && iy >= 1.0
-                    && (ix as usize) + 1 < v.geom.nx
-                    && (iy as usize) + 1 < v.geom.ny
-                    && v.nodes[v.geom.index(ix as usize, iy as usize)].m > 0.0;
+                    && (ix as usize) + 1 < v.geom.nx()
+                    && (iy as usize) + 1 < v.geom.ny()
+                    && v.nodes[v.geom.at(ix as usize, iy as usize)].m > 0.0;
                 let c = &mut self.cracks[ci];
                 if !has_material {
                     let e = 2.0 * self.h;

@@ -197,7 +197,7 @@ impl Cracks {
         iy: usize,
         slot_of: &[u32],
     ) -> Option<Field> {
-        let node = geom.node_pos(ix, iy);
+        let node = geom.pos(ix, iy);
         let mut count = 0;
         for &(ci, si) in self.segs_near(geom, from) {
             let c = &self.cracks[ci as usize];
@@ -205,7 +205,7 @@ impl Cracks {
                 count += 1;
             }
         }
-        let idx = geom.index(ix, iy);
+        let idx = geom.at(ix, iy);
         if count % 2 == 0 {
             Some(Field::Zero(idx))
         } else {

@@ -32,7 +32,7 @@ fn nodes_in(region: &Region, shift: [f64; 2], geom: &GridGeom) -> Vec<u32> {
         [lo[0] + shift[0], lo[1] + shift[1]],
         [hi[0] + shift[0], hi[1] + shift[1]],
     );
-    let (a, b) = (geom.xi(lo), geom.xi(hi));
+    let (a, b) = (geom.xi(&lo), geom.xi(&hi));
     // One node of margin each side: `contains` decides, not the rounding of ξ.
     let range = |lo: f64, hi: f64, n: usize| -> (usize, usize) {
         let first = (lo.ceil() - 1.0).max(0.0);
@@ -42,14 +42,14 @@ fn nodes_in(region: &Region, shift: [f64; 2], geom: &GridGeom) -> Vec<u32> {
         }
         (first as usize, last as usize)
     };
-    let (x0, x1) = range(a[0], b[0], geom.nx);
-    let (y0, y1) = range(a[1], b[1], geom.ny);
+    let (x0, x1) = range(a[0], b[0], geom.nx());
+    let (y0, y1) = range(a[1], b[1], geom.ny());
     let mut nodes = Vec::new();
     for ix in x0..=x1 {
         for iy in y0..=y1 {
-            let p = geom.node_pos(ix, iy);
+            let p = geom.pos(ix, iy);
             if region.contains([p[0] - shift[0], p[1] - shift[1]]) {
-                nodes.push(geom.index(ix, iy) as u32);
+                nodes.push(geom.at(ix, iy) as u32);
             }
         }
     }

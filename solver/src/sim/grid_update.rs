@@ -15,7 +15,7 @@ impl Simulation {
     pub(super) fn reset_grid(&mut self) {
         let [x0, x1, y0, y1] = self.active_box;
         if x1 >= x0 && self.active_nodes > 0 {
-            let ny = self.geom.ny;
+            let ny = self.geom.ny();
             let start = (x0 + PAD) * ny;
             let end = (x1 + 1 + PAD) * ny;
             self.nodes[start..end]
@@ -45,8 +45,8 @@ impl Simulation {
             &mut self.f1_index,
         )
         .map_err(|(idx, fields)| {
-            let (ix, iy) = self.geom.node_of(idx);
-            let p = self.geom.node_pos(ix, iy);
+            let (ix, iy) = self.geom.node_xy(idx);
+            let p = self.geom.pos(ix, iy);
             StepError::TooManyFields {
                 step: self.steps + 1,
                 x: p[0],
@@ -70,9 +70,9 @@ impl Simulation {
         let g = self.geom;
         Some([
             acc.bx[0].max(0) as usize,
-            (acc.bx[1] as usize).min(g.nx - 1),
+            (acc.bx[1] as usize).min(g.nx() - 1),
             acc.bx[2].max(0) as usize,
-            (acc.bx[3] as usize).min(g.ny - 1),
+            (acc.bx[3] as usize).min(g.ny() - 1),
         ])
     }
 
@@ -84,7 +84,7 @@ impl Simulation {
             self.alt_box = None;
         }
         if let Some([x0, x1, y0, y1]) = self.alt_box.take() {
-            let ny = self.geom.ny;
+            let ny = self.geom.ny();
             self.nodes_alt[(x0 + PAD) * ny..(x1 + 1 + PAD) * ny]
                 .par_chunks_mut(ny)
                 .for_each(|col| col[y0..=y1].fill(Node::default()));
@@ -109,12 +109,12 @@ impl Simulation {
         let g = self.geom;
         let b = [
             acc.bx[0].max(0) as usize,
-            (acc.bx[1] as usize).min(g.nx - 1),
+            (acc.bx[1] as usize).min(g.nx() - 1),
             acc.bx[2].max(0) as usize,
-            (acc.bx[3] as usize).min(g.ny - 1),
+            (acc.bx[3] as usize).min(g.ny() - 1),
         ];
         self.active_box = b;
-        let ny = g.ny;
+        let ny = g.ny();
         let m_tiny = self.m_tiny;
         let cols = &self.nodes[(b[0] + PAD) * ny..(b[1] + 1 + PAD) * ny];
         self.active_nodes = cols
@@ -142,7 +142,7 @@ impl Simulation {
             }
         };
         let [x0, x1, y0, y1] = self.active_box;
-        let ny = self.geom.ny;
+        let ny = self.geom.ny();
         if self.active_nodes > 0 {
             self.nodes[(x0 + PAD) * ny..(x1 + 1 + PAD) * ny]
                 .par_chunks_mut(ny)
@@ -184,7 +184,7 @@ impl Simulation {
                 }
             };
             let [x0, x1, y0, y1] = self.active_box;
-            let ny = self.geom.ny;
+            let ny = self.geom.ny();
             let cols = &mut self.nodes[(x0 + PAD) * ny..(x1 + 1 + PAD) * ny];
             let sums = &mut self.col_sums[..x1 + 1 - x0];
             cols.par_chunks_mut(ny)

@@ -68,7 +68,7 @@ impl Simulation {
     }
     /// Nodes of the grid box.
     pub fn grid_node_count(&self) -> usize {
-        self.geom.nx * self.geom.ny
+        self.geom.nx() * self.geom.ny()
     }
     /// Nodes (and extra crack fields) touched by particles in the last step.
     pub fn active_node_count(&self) -> usize {
@@ -154,7 +154,7 @@ impl Simulation {
                 }
             }
         }
-        let nn = g.nx * g.ny;
+        let nn = g.nx() * g.ny();
         let nc = names.len();
         let mut mass = vec![0.0f64; nn];
         let mut acc = vec![0.0f64; nn * nc];
@@ -211,7 +211,7 @@ impl Simulation {
                     comp.values.push(*v as f32);
                 }
             }
-            let w = Weights2::new(self.shape, g.xi(k.x), p.mech[i].lh);
+            let w = Weights2::new(self.shape, g.xi(&k.x), p.mech[i].lh);
             for a in 0..3 {
                 for b in 0..3 {
                     let sh = w.s(a, b);
@@ -220,10 +220,10 @@ impl Simulation {
                     }
                     let ix = (w.x.base + a as i32) as usize;
                     let iy = (w.y.base + b as i32) as usize;
-                    if ix >= g.nx || iy >= g.ny {
+                    if ix >= g.nx() || iy >= g.ny() {
                         continue;
                     }
-                    let n = iy * g.nx + ix;
+                    let n = iy * g.nx() + ix;
                     let sm = sh * p.mech[i].m;
                     mass[n] += sm;
                     for c in 0..nc {
@@ -251,8 +251,8 @@ impl Simulation {
         Snapshot {
             index,
             time: self.time,
-            nx: g.nx as u32,
-            ny: g.ny as u32,
+            nx: g.nx() as u32,
+            ny: g.ny() as u32,
             origin: g.origin,
             cell_size: g.h,
             fields: fields.iter().map(|f| f.name().to_string()).collect(),

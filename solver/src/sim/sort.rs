@@ -9,11 +9,11 @@ impl Simulation {
     /// Counting sort of the particles by cell (column-major), and the strip bounds.
     pub(super) fn sort_particles(&mut self) -> Result<(), StepError> {
         let geom = self.geom;
-        let ncx = geom.nx - 1;
-        let ncy = geom.ny - 1;
+        let ncx = geom.nx() - 1;
+        let ncy = geom.ny() - 1;
         let ncells = ncx * ncy;
         for (i, k) in self.parts.kin.iter().enumerate() {
-            let (cx, cy) = geom.cell(k.x);
+            let (cx, cy) = geom.cell_xy(k.x);
             if cx < 1 || cy < 1 || cx as usize + 2 > ncx || cy as usize + 2 > ncy {
                 return Err(StepError::LeftGrid {
                     step: self.steps,

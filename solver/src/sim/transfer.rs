@@ -147,7 +147,7 @@ impl P2gCx {
     /// its 1/(4l)).
     #[inline(always)]
     fn weights(&self, x: [f64; 2], lh: f64, lq: &mut (f64, f64)) -> Weights2 {
-        let xi = self.geom.xi(x);
+        let xi = self.geom.xi(&x);
         if self.gimp {
             if lh != lq.0 {
                 *lq = (lh, 0.25 / lh);
@@ -362,7 +362,7 @@ impl Simulation {
         let h = geom.h;
         let slot_of = std::mem::take(&mut self.slot_of);
         let loads = std::mem::take(&mut self.load_now);
-        let (ncx, ncy) = ((geom.nx - 1) as i64, (geom.ny - 1) as i64);
+        let (ncx, ncy) = ((geom.nx() - 1) as i64, (geom.ny() - 1) as i64);
         let acc = self.strips(&|s, first, p, mut g| {
             A::run(|| {
                 // Locals, not captured references (see `pass_p2g`).
@@ -405,7 +405,7 @@ impl Simulation {
                             first_fail(&mut acc, first + i, FAIL_POSITION);
                         } else {
                             // Truncation (not floor): negative ξ gives 0 and is caught as < 1 too.
-                            let xi = geom.xi(xn);
+                            let xi = geom.xi(&xn);
                             let (cx, cy) = (xi[0] as i64, xi[1] as i64);
                             if xi[0] < 1.0 || xi[1] < 1.0 || cx + 1 >= ncx || cy + 1 >= ncy {
                                 first_fail(&mut acc, first + i, FAIL_GRID);
