@@ -17,7 +17,7 @@ use crate::step::Simulation;
 /// First bytes of every core checkpoint.
 pub const MAGIC: [u8; 8] = *b"MPMCORE\0";
 /// Layout version of the state.
-pub const FORMAT: u32 = 1;
+pub const FORMAT: u32 = 2;
 
 /// Why a checkpoint was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]

@@ -95,13 +95,24 @@ pub trait Dim: Copy + Clone + Debug + Default + PartialEq + Send + Sync + 'stati
     /// Node counts or node indices: `[usize; N]`.
     type U: Stored<usize>;
     /// A velocity gradient L (row-major N×N: L[r·N + c] = ∂v_r/∂x_c).
-    type L: Array<f64>;
+    type L: Stored<f64>;
     /// A stress: 2D (xx, yy, xy, zz); 3D (xx, yy, zz, yz, xz, xy).
     type S: Stored<f64>;
     /// Shape-function weights, one [`Weights1`] per direction.
     type W: Array<Weights1>;
     /// The weights a particle caches for the step, one [`CachedW1`] per direction.
     type C: Array<CachedW1>;
+    /// A particle's crack-field mask: one bit per stencil pair (set: the pair uses velocity
+    /// field 1). u16 in 2D (9 pairs), u32 in 3D (27).
+    type Mask: Copy
+        + Default
+        + Debug
+        + PartialEq
+        + Send
+        + Sync
+        + Serialize
+        + DeserializeOwned
+        + 'static;
 
     /// Stress half-update Δσ = C:Δε for L (in 1/s) over `dt`, returning ΔW = ½(σ_old +
     /// σ_new):Δε (the midpoint rule; `algorithm.md` §2).
@@ -196,6 +207,7 @@ impl Dim for Dim2 {
     type S = [f64; 4];
     type W = [Weights1; 2];
     type C = [CachedW1; 2];
+    type Mask = u16;
 
     #[inline(always)]
     fn stress_update<A: Arith>(m: &Elastic, s: &mut [f64; 4], l: &[f64; 4], dt: f64) -> f64 {
@@ -260,6 +272,7 @@ impl Dim for Dim3 {
     type S = [f64; 6];
     type W = [Weights1; 3];
     type C = [CachedW1; 3];
+    type Mask = u32;
 
     #[inline(always)]
     fn stress_update<A: Arith>(m: &Elastic, s: &mut [f64; 6], l: &[f64; 9], dt: f64) -> f64 {

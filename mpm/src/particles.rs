@@ -64,6 +64,12 @@ pub struct Particles<D: Dim> {
     /// the step: not in checkpoints.
     #[serde(skip)]
     pub wts: Vec<D::C>,
+    /// Displacement gradient ∂u_r/∂x_c (row-major, as `Dim::L`), accumulated as Σ L·Δt; only
+    /// the J-integral needs it, so it is empty (never computed) when the scene has no cracks.
+    pub grad_u: Vec<D::L>,
+    /// Crack field of each particle–node pair (bit k of the stencil's pair k, x outer: set
+    /// means the pair uses velocity field 1). Empty when the scene has no cracks.
+    pub fmask: Vec<D::Mask>,
 }
 
 impl<D: Dim> Particles<D> {
@@ -94,8 +100,14 @@ pub struct PartsMut<'a, D: Dim> {
     pub mech: &'a mut [Mech],
     /// Stress.
     pub stress: &'a mut [D::S],
+    /// Metadata.
+    pub cold: &'a mut [Cold<D>],
     /// Strain energy densities.
     pub wden: &'a mut [f64],
+    /// Field masks (empty without cracks).
+    pub fmask: &'a mut [D::Mask],
+    /// Displacement gradients (empty without cracks).
+    pub grad_u: &'a mut [D::L],
     /// Weights of the step.
     pub wts: &'a mut [D::C],
 }
@@ -107,7 +119,10 @@ impl<'a, D: Dim> PartsMut<'a, D> {
             kin: &mut p.kin,
             mech: &mut p.mech,
             stress: &mut p.stress,
+            cold: &mut p.cold,
             wden: &mut p.wden,
+            fmask: &mut p.fmask,
+            grad_u: &mut p.grad_u,
             wts: &mut p.wts,
         }
     }
@@ -119,43 +134,68 @@ impl<'a, D: Dim> PartsMut<'a, D> {
     pub fn is_empty(&self) -> bool {
         self.kin.is_empty()
     }
-    /// Assert that every slice has the length of the view, so the compiler drops the range
-    /// checks of `slice[i]` for `i < len()`.
+    /// Assert that every per-particle slice has the length of the view (the optional ones
+    /// may be empty), so the compiler drops the range checks of `slice[i]` for `i < len()`.
     #[inline(always)]
     pub fn assert_lengths(&self) {
         let n = self.kin.len();
         assert!(
             self.mech.len() == n
                 && self.stress.len() == n
+                && self.cold.len() == n
                 && self.wden.len() == n
-                && self.wts.len() == n,
+                && self.wts.len() == n
+                && (self.fmask.is_empty() || self.fmask.len() == n)
+                && (self.grad_u.is_empty() || self.grad_u.len() == n),
             "particle arrays of unequal length"
         );
     }
-}
-
-impl<D: Dim> SplitParts for PartsMut<'_, D> {
-    fn split_at(self, i: usize) -> (Self, Self) {
+    /// Split at particle `i` (relative to the view).
+    pub fn split_at(self, i: usize) -> (PartsMut<'a, D>, PartsMut<'a, D>) {
         let (k0, k1) = self.kin.split_at_mut(i);
         let (m0, m1) = self.mech.split_at_mut(i);
         let (s0, s1) = self.stress.split_at_mut(i);
+        let (c0, c1) = self.cold.split_at_mut(i);
         let (x0, x1) = self.wden.split_at_mut(i);
+        let (f0, f1) = if self.fmask.is_empty() {
+            (&mut [][..], &mut [][..])
+        } else {
+            self.fmask.split_at_mut(i)
+        };
         let (w0, w1) = self.wts.split_at_mut(i);
+        let (g0, g1) = if self.grad_u.is_empty() {
+            (&mut [][..], &mut [][..])
+        } else {
+            self.grad_u.split_at_mut(i)
+        };
         (
             PartsMut {
                 kin: k0,
                 mech: m0,
                 stress: s0,
+                cold: c0,
                 wden: x0,
+                fmask: f0,
+                grad_u: g0,
                 wts: w0,
             },
             PartsMut {
                 kin: k1,
                 mech: m1,
                 stress: s1,
+                cold: c1,
                 wden: x1,
+                fmask: f1,
+                grad_u: g1,
                 wts: w1,
             },
         )
+    }
+}
+
+impl<D: Dim> SplitParts for PartsMut<'_, D> {
+    #[inline]
+    fn split_at(self, i: usize) -> (Self, Self) {
+        PartsMut::split_at(self, i)
     }
 }

@@ -26,13 +26,6 @@ pub type GridGeom = fracture_mpm::grid::GridGeom<Dim2>;
 /// Mutable view of a contiguous range of grid storage and of the field-1 nodes inside it.
 pub type GridMut<'a> = fracture_mpm::grid::GridMut<'a, Dim2>;
 
-impl fracture_mpm::grid::SplitParts for PartsMut<'_> {
-    #[inline]
-    fn split_at(self, i: usize) -> (Self, Self) {
-        PartsMut::split_at(self, i)
-    }
-}
-
 /// Run `f` on every strip of colour `colour` (0 even, 1 odd) in parallel (the core's
 /// [`fracture_mpm::grid::for_strips`] over the 2D solver's particle views).
 #[inline]

@@ -101,33 +101,30 @@ impl Weights2 {
 }
 
 /// The shape-function weights a particle's P2G caches for the step's later passes
-/// (`algorithm.md` §2 allows cached per-step quantities in f32): per direction the base and
-/// the outer nodes' S and S' rounded to f32; the middle node follows from Σ S = 1 and
-/// Σ S' = 0 in f64 (as `gimp_weights_1d` computes it), so the unpacked weights keep the
-/// partition of unity to the last bit of f64. 40 bytes instead of `Weights2`'s 112.
-#[derive(Debug, Clone, Copy, Default, PartialEq)]
-pub struct CachedW2 {
-    /// x.
-    pub x: CachedW1,
-    /// y.
-    pub y: CachedW1,
+/// (`algorithm.md` §2 allows cached per-step quantities in f32): per direction (x, y) the
+/// core's [`CachedW1`], the base and the outer nodes' S and S' rounded to f32; the middle node
+/// follows from Σ S = 1 and Σ S' = 0 in f64, so the unpacked weights keep the partition of
+/// unity to the last bit of f64. 40 bytes instead of `Weights2`'s 112.
+pub type CachedW2 = [CachedW1; 2];
+
+/// Packing and unpacking of [`CachedW2`] from and to the 2D [`Weights2`].
+pub trait Cached2 {
+    /// The cached form of `w`.
+    fn pack(w: &Weights2) -> Self;
+    /// The weights the passes use: the outer ones as stored, the middle from Σ S = 1, Σ S' = 0.
+    fn unpack(&self) -> Weights2;
 }
 
-impl CachedW2 {
-    /// The cached form of `w`.
+impl Cached2 for CachedW2 {
     #[inline(always)]
-    pub fn pack(w: &Weights2) -> CachedW2 {
-        CachedW2 {
-            x: CachedW1::pack(&w.x),
-            y: CachedW1::pack(&w.y),
-        }
+    fn pack(w: &Weights2) -> CachedW2 {
+        [CachedW1::pack(&w.x), CachedW1::pack(&w.y)]
     }
-    /// The weights the passes use: the outer ones as stored, the middle from Σ S = 1, Σ S' = 0.
     #[inline(always)]
-    pub fn unpack(&self) -> Weights2 {
+    fn unpack(&self) -> Weights2 {
         Weights2 {
-            x: self.x.unpack(),
-            y: self.y.unpack(),
+            x: self[0].unpack(),
+            y: self[1].unpack(),
         }
     }
 }

@@ -135,6 +135,8 @@ fn run_hash(s: &Scene, steps: u64, kernel: Kernel, threads: usize) -> (String, f
     }
     let snap = sim.snapshot(0, &FieldKind::ALL);
     h.update(serde_json::to_vec(&snap).unwrap());
+    // The checkpoint's bytes: a checkpoint written before the move resumes after it.
+    h.update(sim.checkpoint());
     let grown = sim
         .crack_tips()
         .iter()

@@ -16,7 +16,7 @@
 //! sums that start at +0: results are bitwise identical (`tests/stencil_paths.rs`).
 
 use crate::grid::{GridGeom, GridMut, Node, field0_columns, visit_stencil};
-use crate::shape::{CachedW2, Weights2};
+use crate::shape::{Cached2, CachedW2, Weights2};
 
 /// The node visits of one particle's stencil. `f(S, ∇S, node)`, ∇S in cell units
 /// (`Weights2::g`), in the order a (x) then b (y).

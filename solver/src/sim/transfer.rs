@@ -19,7 +19,7 @@ use crate::grid::{GridGeom, GridMut, Reduce, STRIP, for_strips};
 use crate::kernel::{Arith, Fma, Kernel, Portable, madd};
 use crate::material::Elastic;
 use crate::particles::PartsMut;
-use crate::shape::{CachedW2, Weights2, gimp_weights_1d};
+use crate::shape::{Cached2, CachedW2, Weights2, gimp_weights_1d};
 
 /// Reduction of a particle pass: partial sums and the first offending particle.
 #[derive(Debug, Clone, Copy, Default)]
@@ -67,7 +67,7 @@ impl Reduce for Acc {
 /// Accumulate the stencil's contribution into the active box of `acc`.
 #[inline(always)]
 fn grow_box(acc: &mut Acc, w: &CachedW2) {
-    let (bx, by) = (w.x.base as i64, w.y.base as i64);
+    let (bx, by) = (w[0].base as i64, w[1].base as i64);
     if acc.has_box {
         acc.bx[0] = acc.bx[0].min(bx);
         acc.bx[1] = acc.bx[1].max(bx + 2);
