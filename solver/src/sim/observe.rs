@@ -183,7 +183,7 @@ impl Simulation {
             let e = [
                 (s[0] - mt.nu * (s[1] + s[3])) / mt.e,
                 (s[1] - mt.nu * (s[0] + s[3])) / mt.e,
-                s[2] / mt.c66,
+                s[2] / mt.mu,
             ];
             for (c, name) in names.iter().enumerate() {
                 vals[c] = match *name {

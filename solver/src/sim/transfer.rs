@@ -20,6 +20,7 @@ use crate::kernel::{Arith, Fma, Kernel, Portable, madd};
 use crate::material::Elastic;
 use crate::particles::PartsMut;
 use crate::shape::{Cached2, CachedW2, Weights2, gimp_weights_1d};
+use fracture_mpm::{Dim, Dim2};
 
 /// Reduction of a particle pass: partial sums and the first offending particle.
 #[derive(Debug, Clone, Copy, Default)]
@@ -110,7 +111,7 @@ fn stress_apply<A: Arith>(
         r[0] *= inv_h;
         r[1] *= inv_h;
     }
-    *w += mat.update_k::<A>(stress, l, half);
+    *w += Dim2::stress_update::<A>(mat, stress, &[l[0][0], l[0][1], l[1][0], l[1][1]], half);
     if let Some(gu) = grad_u {
         gu[0] = madd::<A>(l[0][0], half, gu[0]);
         gu[1] = madd::<A>(l[0][1], half, gu[1]);
