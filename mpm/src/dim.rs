@@ -10,8 +10,10 @@ use fracture_api::scene::{Analysis, Material, ShapeFunction};
 use serde::Serialize;
 use serde::de::DeserializeOwned;
 
+use crate::grid::{GridGeom, GridMut};
 use crate::math::{Arith, madd};
 use crate::shape::{CachedW1, Weights1, weights_1d};
+use crate::stencil::{Field0, Rows, Stencil};
 
 /// A fixed-size array of `T` (`[T; N]` for the dimension's N), read and written as a slice.
 pub trait Array<T>:
@@ -112,7 +114,17 @@ pub trait Dim: Copy + Clone + Debug + Default + PartialEq + Send + Sync + 'stati
         + Sync
         + Serialize
         + DeserializeOwned
+        + Into<u32>
         + 'static;
+    /// The fast-path stencil of a particle whose pairs are all in field 0
+    /// ([`crate::stencil`]).
+    type Fast<'a>: Stencil<Self>
+    where
+        Self: 'a;
+
+    /// The fast-path stencil of the cached weights `c` in the strip's grid `g`.
+    fn fast<'a>(g: &'a mut GridMut<'_, Self>, geom: &GridGeom<Self>, c: &Self::C)
+    -> Self::Fast<'a>;
 
     /// Stress half-update Δσ = C:Δε for L (in 1/s) over `dt`, returning ΔW = ½(σ_old +
     /// σ_new):Δε (the midpoint rule; `algorithm.md` §2).
@@ -208,6 +220,16 @@ impl Dim for Dim2 {
     type W = [Weights1; 2];
     type C = [CachedW1; 2];
     type Mask = u16;
+    type Fast<'a> = Field0<'a>;
+
+    #[inline(always)]
+    fn fast<'a>(
+        g: &'a mut GridMut<'_, Dim2>,
+        geom: &GridGeom<Dim2>,
+        c: &[CachedW1; 2],
+    ) -> Field0<'a> {
+        Field0::new(g, geom, c)
+    }
 
     #[inline(always)]
     fn stress_update<A: Arith>(m: &Elastic, s: &mut [f64; 4], l: &[f64; 4], dt: f64) -> f64 {
@@ -273,6 +295,16 @@ impl Dim for Dim3 {
     type W = [Weights1; 3];
     type C = [CachedW1; 3];
     type Mask = u32;
+    type Fast<'a> = Rows<'a, Dim3>;
+
+    #[inline(always)]
+    fn fast<'a>(
+        g: &'a mut GridMut<'_, Dim3>,
+        geom: &GridGeom<Dim3>,
+        c: &[CachedW1; 3],
+    ) -> Rows<'a, Dim3> {
+        Rows::new(g, geom, c)
+    }
 
     #[inline(always)]
     fn stress_update<A: Arith>(m: &Elastic, s: &mut [f64; 6], l: &[f64; 9], dt: f64) -> f64 {

@@ -24,6 +24,7 @@ pub mod passes;
 pub mod scenes;
 pub mod shape;
 pub mod state;
+pub mod stencil;
 pub mod step;
 
 pub use backend::{Backend, Cpu};

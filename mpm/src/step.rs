@@ -18,7 +18,7 @@ use crate::dim::Dim;
 use crate::grid::{GridGeom, Node, PAD, STRIP};
 use crate::math::Kernel;
 use crate::particles::Particles;
-use crate::passes::{Acc, FAIL_GRID, FAIL_POSITION, FAIL_VELOCITY};
+use crate::passes::{Acc, FAIL_GRID, FAIL_POSITION, FAIL_VELOCITY, Grid, PassCx};
 use crate::state::{BcNodes, Ledger, Model, PassTimes, Region, Scratch, Spec, State};
 
 /// Why a simulation could not be built.
@@ -414,7 +414,11 @@ impl<D: Dim> Simulation<D> {
         let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
         let acc = match prefetched {
             Some(acc) => acc,
-            None => self.backend.p2g(m, st, sc),
+            None => {
+                let cx = pass_cx(m, &st.strip_bounds, &sc.load_now);
+                self.backend
+                    .p2g(&cx, &mut st.parts, &mut Grid::single(&mut sc.nodes))
+            }
         };
         lap(|t| &mut t.p2g, &mut self.scratch);
         self.check(&acc)?;
@@ -424,7 +428,10 @@ impl<D: Dim> Simulation<D> {
         lap(|t| &mut t.grid, &mut self.scratch);
 
         let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
-        let acc = self.backend.forces(m, st, sc);
+        let cx = pass_cx(m, &st.strip_bounds, &sc.load_now);
+        let acc = self
+            .backend
+            .forces(&cx, &mut st.parts, &mut Grid::single(&mut sc.nodes));
         lap(|t| &mut t.forces, &mut self.scratch);
         self.check(&acc)?;
         self.damp_forces();
@@ -433,7 +440,10 @@ impl<D: Dim> Simulation<D> {
         lap(|t| &mut t.grid, &mut self.scratch);
 
         let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
-        let acc = self.backend.update(m, st, sc);
+        let cx = pass_cx(m, &st.strip_bounds, &sc.load_now);
+        let acc = self
+            .backend
+            .update(&cx, &mut st.parts, &mut Grid::single(&mut sc.nodes));
         lap(|t| &mut t.update, &mut self.scratch);
         self.check(&acc)?;
         let l = &mut self.state.ledger;
@@ -448,13 +458,21 @@ impl<D: Dim> Simulation<D> {
         let acc = if self.scratch.fuse && !self.state.needs_sort {
             self.zero_alt();
             let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
-            let (acc, next) = self.backend.strain_p2g(m, st, sc);
+            let cx = pass_cx(m, &st.strip_bounds, &sc.load_now);
+            let (acc, next) = self.backend.strain_p2g(
+                &cx,
+                &mut st.parts,
+                &mut Grid::single(&mut sc.nodes),
+                &mut sc.nodes_alt,
+            );
             self.scratch.alt_box = self.box_of(&next);
             self.scratch.prefetched = Some(next);
             acc
         } else {
             let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
-            self.backend.strain(m, st, sc)
+            let cx = pass_cx(m, &st.strip_bounds, &sc.load_now);
+            self.backend
+                .strain(&cx, &mut st.parts, &mut Grid::single(&mut sc.nodes))
         };
         lap(|t| &mut t.strain, &mut self.scratch);
         self.check(&acc)?;
@@ -860,4 +878,20 @@ fn kinetic_energy<D: Dim>(p: &Particles<D>) -> f64 {
             0.5 * m.m * v2
         })
         .sum()
+}
+
+/// The pass context of the continuum step (no crack fields).
+fn pass_cx<'a, D: Dim>(m: &'a Model<D>, bounds: &'a [usize], loads: &'a [D::V]) -> PassCx<'a, D> {
+    PassCx {
+        geom: m.geom,
+        shape: m.shape,
+        kernel: m.kernel,
+        dt: m.dt,
+        mats: &m.mats,
+        loads,
+        bounds,
+        slot_of: &[],
+        displacement: false,
+        fast: PassCx::<D>::fast_ok(m.shape),
+    }
 }

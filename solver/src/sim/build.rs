@@ -143,6 +143,7 @@ impl Simulation {
             // The portable kernel by default: every stored result and test reproduces bit for
             // bit; the FMA build is chosen with `set_kernel` or `fracture bench --kernel`.
             kernel: crate::kernel::Kernel::Portable,
+            backend: Box::new(fracture_mpm::Cpu),
         };
         if multi_field {
             sim.slot_of = vec![u32::MAX; storage];

@@ -74,18 +74,8 @@ pub enum StepError {
     },
 }
 
-pub(super) const FAIL_VELOCITY: u8 = 1;
-pub(super) const FAIL_POSITION: u8 = 2;
-pub(super) const FAIL_STRESS: u8 = 3;
-pub(super) const FAIL_GRID: u8 = 4;
-
-/// Record failure `kind` of sorted particle `i` unless an earlier one is recorded.
-#[inline(always)]
-pub(super) fn first_fail(acc: &mut Acc, i: usize, kind: u8) {
-    if acc.fail.is_none() {
-        acc.fail = Some((i, kind));
-    }
-}
+// The failure kinds of the core's particle passes.
+use fracture_mpm::passes::{FAIL_GRID, FAIL_POSITION, FAIL_VELOCITY};
 
 impl Simulation {
     /// The step error of a pass's first failure, if any.

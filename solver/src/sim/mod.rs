@@ -27,7 +27,6 @@ mod errors;
 mod grid_update;
 mod observe;
 mod sort;
-mod stencil;
 mod transfer;
 
 use fracture_api::Scene;
@@ -118,6 +117,8 @@ pub struct Simulation {
     fuse: bool,
     /// Arithmetic of the particle passes (`kernel.rs`).
     kernel: crate::kernel::Kernel,
+    /// Where the particle passes run (the core's host backend today).
+    backend: Box<dyn fracture_mpm::Backend<fracture_mpm::Dim2>>,
 }
 
 impl Simulation {
