@@ -17,6 +17,7 @@
 pub mod backend;
 pub mod checkpoint;
 pub mod dim;
+pub mod fracture;
 pub mod grid;
 pub mod math;
 pub mod particles;

@@ -21,7 +21,8 @@ pub mod material;
 pub mod particles;
 pub mod shape;
 pub mod sim;
-pub mod tip_mechanics;
+/// Tip mechanics (A(v), Williams fields, kink criteria): the core's dimension-free laws.
+pub use fracture_mpm::fracture::tip_mechanics;
 
 pub use sim::{
     BuildError, CheckpointError, Parallelism, Simulation, SolverConfig, StepError, StepStats,

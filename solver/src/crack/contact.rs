@@ -6,6 +6,8 @@
 //! struck body's surface normal from the nodal masses ([`Cracks::body_normals`]).
 
 use fracture_api::scene::ContactLaw;
+use fracture_mpm::Dim2;
+use fracture_mpm::fracture::contact::{coulomb_change, stick_change};
 
 use crate::grid::Node;
 
@@ -56,12 +58,8 @@ impl Cracks {
                 Stage::Reextrapolated => nd.q,
             };
             let (pa, pb) = (mom(a), mom(b));
-            let big_m = a.m + b.m;
             // Stick change: both fields at the centre-of-mass velocity.
-            let d = [
-                (a.m * pb[0] - b.m * pa[0]) / big_m,
-                (a.m * pb[1] - b.m * pa[1]) / big_m,
-            ];
+            let d = stick_change::<Dim2>(a.m, &pa, b.m, &pb);
             let n = info.normal;
             let dn = d[0] * n[0] + d[1] * n[1];
             let node_index = f1_index[s] as usize;
@@ -102,28 +100,12 @@ impl Cracks {
                     if !(sep < 0.0 && (approaching || pressed)) {
                         continue;
                     }
-                    let normal = if approaching {
-                        [dn * n[0], dn * n[1]]
+                    let capacity = if stage == Stage::Forces {
+                        -dn
                     } else {
-                        [0.0, 0.0]
+                        held.max(-dn)
                     };
-                    if friction > 0.0 {
-                        let t = [d[0] - dn * n[0], d[1] - dn * n[1]];
-                        let tl = norm(t);
-                        let capacity = if stage == Stage::Forces {
-                            -dn
-                        } else {
-                            held.max(-dn)
-                        };
-                        let limit = friction * capacity.max(0.0);
-                        if tl > limit {
-                            [normal[0] + limit * t[0] / tl, normal[1] + limit * t[1] / tl]
-                        } else {
-                            [normal[0] + t[0], normal[1] + t[1]]
-                        }
-                    } else {
-                        normal
-                    }
+                    coulomb_change::<Dim2>(&d, &n, approaching, friction, capacity)
                 }
             };
             if stage == Stage::Forces && matches!(law, ContactLaw::Coulomb { .. }) {
