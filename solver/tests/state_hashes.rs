@@ -62,6 +62,8 @@ fn cases() -> Vec<(&'static str, Scene, u64, bool)> {
         ),
         ("coulomb-crack", product_scene("coulomb-crack"), 120, false),
         ("kalthoff-winkler", kw, 200, true),
+        ("damped-held-plate", damped_held_plate(), 100, false),
+        ("viscous-held-cracked-plate", viscous_held_cracked_plate(), 150, true),
     ]
 }
 
@@ -82,6 +84,45 @@ fn moving_cracked_plate() -> Scene {
             {"region": {"rectangle": {"min": [0.0, 0.0415], "max": [1.0, 1.0]}}, "traction": [0.0, 2.0e6], "ramp_time": 5.0e-6},
             {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, 0.0025]}}, "traction": [0.0, -2.0e6], "ramp_time": 5.0e-6}
         ],
+        "time": {"end": 4.0e-5}
+    }))
+}
+
+/// A plate held at its foot, pulled at its top, with kinetic damping (conditions, loads and
+/// damping on the grid).
+fn damped_held_plate() -> Scene {
+    scene(serde_json::json!({
+        "grid": {"cell_size": 0.001, "min": [0.0, 0.0], "max": [0.06, 0.03]},
+        "materials": {"m": homalite()},
+        "bodies": [{"material": "m", "region": {"rectangle": {"min": [0.004, 0.004], "max": [0.036, 0.026]}}}],
+        "boundary_conditions": [{"region": {"rectangle": {"min": [0.0, 0.0], "max": [0.06, 0.0041]}},
+                                 "velocity": {"y": 0.0}}],
+        "loads": [{"region": {"rectangle": {"min": [0.0, 0.0255], "max": [1.0, 1.0]}},
+                   "traction": [1.0e6, 2.0e6], "ramp_time": 2.0e-6}],
+        "damping": {"kind": "kinetic", "coefficient": 0.05},
+        "time": {"end": 2.0e-5}
+    }))
+}
+
+/// An edge-cracked plate held along the cracked edge (conditions on nodes with two fields),
+/// with viscous damping and a growing crack.
+fn viscous_held_cracked_plate() -> Scene {
+    let h = 0.001;
+    let m = 2.0 * h;
+    scene(serde_json::json!({
+        "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [0.044, 0.044]},
+        "materials": {"m": homalite()},
+        "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [0.042, 0.042]}}}],
+        "cracks": [{"points": [[m - 0.5 * h, 0.0225], [0.015, 0.0225]],
+                    "j_integral": {"method": "domain", "radius": 6.0 * h},
+                    "propagation": {"criterion": "energy_release", "toughness": 5.0}}],
+        "boundary_conditions": [{"region": {"rectangle": {"min": [0.0, 0.0], "max": [m + 0.6 * h, 0.044]}},
+                                 "velocity": {"x": 0.0}}],
+        "loads": [
+            {"region": {"rectangle": {"min": [0.0, 0.0415], "max": [1.0, 1.0]}}, "traction": [0.0, 2.0e6], "ramp_time": 5.0e-6},
+            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, 0.0025]}}, "traction": [0.0, -2.0e6], "ramp_time": 5.0e-6}
+        ],
+        "damping": {"kind": "viscous", "coefficient": 2000.0},
         "time": {"end": 4.0e-5}
     }))
 }
