@@ -19,6 +19,7 @@ pub mod checkpoint;
 pub mod dim;
 pub mod fracture;
 pub mod grid;
+pub mod gridops;
 pub mod math;
 pub mod particles;
 pub mod passes;

@@ -10,12 +10,10 @@
 
 use std::time::Instant;
 
-use fracture_api::scene::Damping;
-use rayon::prelude::*;
-
 use crate::backend::{Backend, Cpu};
 use crate::dim::Dim;
-use crate::grid::{GridGeom, Node, PAD, STRIP};
+use crate::grid::{GridGeom, Node, STRIP};
+use crate::gridops::{self, Stage};
 use crate::math::Kernel;
 use crate::particles::Particles;
 use crate::passes::{Acc, FAIL_GRID, FAIL_POSITION, FAIL_VELOCITY, Grid, PassCx};
@@ -424,7 +422,7 @@ impl<D: Dim> Simulation<D> {
         self.check(&acc)?;
         self.set_active(&acc);
         self.apply_bc_momentum(t0, false);
-        self.nodal(0);
+        self.nodal(Stage::Extrapolated);
         lap(|t| &mut t.grid, &mut self.scratch);
 
         let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
@@ -436,7 +434,7 @@ impl<D: Dim> Simulation<D> {
         self.check(&acc)?;
         self.damp_forces();
         self.bc_force_fix(t1);
-        self.nodal(1);
+        self.nodal(Stage::Forces);
         lap(|t| &mut t.grid, &mut self.scratch);
 
         let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
@@ -452,7 +450,7 @@ impl<D: Dim> Simulation<D> {
         l.work_abs += acc.w.abs();
         self.state.needs_sort |= acc.resort;
         self.apply_bc_momentum(t1, true);
-        self.nodal(2);
+        self.nodal(Stage::Reextrapolated);
         lap(|t| &mut t.grid, &mut self.scratch);
 
         let acc = if self.scratch.fuse && !self.state.needs_sort {
@@ -631,74 +629,24 @@ impl<D: Dim> Simulation<D> {
         }
         if let Some(b) = sc.alt_box.take() {
             let geom = self.model.geom;
-            for_box(&geom, &mut sc.nodes_alt, b, &mut sc.plane_sums, |n| {
+            gridops::for_box(&geom, &mut sc.nodes_alt, b, &mut sc.plane_sums, |n| {
                 *n = Node::default();
                 0.0
             });
         }
-    }
-
-    /// Apply `f` to every node of the active box, planes in parallel; per-plane results
-    /// are summed in plane order.
-    fn each_active(&mut self, f: impl Fn(&mut Node<D>) -> f64 + Sync) -> f64 {
-        let Some(b) = self.scratch.active else {
-            return 0.0;
-        };
-        let geom = self.model.geom;
-        let sc = &mut self.scratch;
-        for_box(&geom, &mut sc.nodes, b, &mut sc.plane_sums, f)
-    }
-}
-
-/// Apply `f` to every node of the box `(lo, hi)` of `nodes`, x-planes in parallel; the
-/// per-plane results are summed in plane order.
-fn for_box<D: Dim>(
-    geom: &GridGeom<D>,
-    nodes: &mut [Node<D>],
-    (lo, hi): (D::U, D::U),
-    plane_sums: &mut [f64],
-    f: impl Fn(&mut Node<D>) -> f64 + Sync,
-) -> f64 {
-    {
-        let geom = *geom;
-        let plane = geom.plane();
-        let (x0, x1) = (lo.as_ref()[0], hi.as_ref()[0]);
-        let planes = &mut nodes[(x0 + PAD) * plane..(x1 + 1 + PAD) * plane];
-        let sums = &mut plane_sums[..x1 + 1 - x0];
-        let (lo, hi) = (lo, hi);
-        planes
-            .par_chunks_mut(plane)
-            .zip(sums.par_iter_mut())
-            .for_each(|(c, s)| {
-                let mut acc = 0.0;
-                if D::N == 2 {
-                    let (y0, y1) = (lo.as_ref()[1], hi.as_ref()[1]);
-                    for n in &mut c[y0..=y1] {
-                        acc += f(n);
-                    }
-                } else {
-                    let nz = geom.strides.as_ref()[1];
-                    let (y0, y1) = (lo.as_ref()[1], hi.as_ref()[1]);
-                    let (z0, z1) = (lo.as_ref()[2], hi.as_ref()[2]);
-                    for iy in y0..=y1 {
-                        for n in &mut c[iy * nz + z0..=iy * nz + z1] {
-                            acc += f(n);
-                        }
-                    }
-                }
-                *s = acc;
-            });
-        sums.iter().sum()
     }
 }
 
 impl<D: Dim> Simulation<D> {
     /// Zero the grid where the last step wrote.
     fn reset_grid(&mut self) {
-        self.each_active(|n| {
-            *n = Node::default();
-            0.0
-        });
+        let sc = &mut self.scratch;
+        gridops::reset(
+            &self.model.geom,
+            &mut sc.nodes,
+            sc.active,
+            &mut sc.plane_sums,
+        );
     }
 
     /// The active box of a P2G's reduction (clamped) and the number of nodes with mass.
@@ -716,30 +664,30 @@ impl<D: Dim> Simulation<D> {
             hi.as_mut()[d] = (acc.hi[d] as usize).min(g.n.as_ref()[d] - 1);
         }
         self.scratch.active = Some((lo, hi));
-        let m_tiny = self.model.m_tiny;
-        self.scratch.active_nodes =
-            self.each_active(|n| if n.m > m_tiny { 1.0 } else { 0.0 }) as usize;
+        let sc = &mut self.scratch;
+        sc.active_nodes = gridops::count(
+            &g,
+            &mut sc.nodes,
+            (lo, hi),
+            &mut sc.plane_sums,
+            self.model.m_tiny,
+        );
     }
 
-    /// Nodal velocity (stage 0: p/m; 2: q/m) or acceleration (stage 1: f/m).
-    fn nodal(&mut self, stage: u8) {
+    /// Nodal velocity (p/m, then q/m) or acceleration (f/m) at `stage`.
+    fn nodal(&mut self, stage: Stage) {
+        let sc = &mut self.scratch;
+        let geom = &self.model.geom;
         let m_tiny = self.model.m_tiny;
-        self.each_active(move |n| {
-            if n.m > m_tiny {
-                let inv = 1.0 / n.m;
-                for d in 0..D::N {
-                    match stage {
-                        0 => n.v.as_mut()[d] = n.p.as_ref()[d] * inv,
-                        1 => n.a.as_mut()[d] = n.f.as_ref()[d] * inv,
-                        _ => n.v.as_mut()[d] = n.q.as_ref()[d] * inv,
-                    }
-                }
-            } else {
-                n.v = D::V::default();
-                n.a = D::V::default();
-            }
-            0.0
-        });
+        gridops::nodal(
+            geom,
+            &mut sc.nodes,
+            sc.active,
+            &mut [],
+            &mut sc.plane_sums,
+            stage,
+            m_tiny,
+        );
     }
 
     /// The loads' ramped tractions at `t0`, and moving conditions' nodes.
@@ -822,41 +770,17 @@ impl<D: Dim> Simulation<D> {
 
     /// Damping after the force pass; the work it removes is dissipated.
     fn damp_forces(&mut self) {
-        let dt = self.model.dt;
-        let m_tiny = self.model.m_tiny;
-        let damp = self.model.damping.clone();
-        if matches!(damp, Damping::None) {
-            return;
-        }
-        let d = self.each_active(move |n| {
-            if n.m <= m_tiny {
-                return 0.0;
-            }
-            let mut v = D::V::default();
-            for d in 0..D::N {
-                v.as_mut()[d] = n.p.as_ref()[d] / n.m;
-            }
-            let mut out = 0.0;
-            match damp {
-                Damping::Viscous { coefficient } => {
-                    for d in 0..D::N {
-                        let fd = coefficient * n.p.as_ref()[d];
-                        n.f.as_mut()[d] -= fd;
-                        out += fd * v.as_ref()[d];
-                    }
-                    out * dt
-                }
-                Damping::Kinetic { coefficient } => {
-                    for d in 0..D::N {
-                        let fd = coefficient * n.f.as_ref()[d].abs() * v.as_ref()[d].signum();
-                        n.f.as_mut()[d] -= fd;
-                        out += fd * v.as_ref()[d] * dt;
-                    }
-                    out
-                }
-                Damping::None => 0.0,
-            }
-        });
+        let (m, sc) = (&self.model, &mut self.scratch);
+        let d = gridops::damp(
+            &m.geom,
+            &mut sc.nodes,
+            sc.active,
+            &mut [],
+            &mut sc.plane_sums,
+            &m.damping,
+            m.m_tiny,
+            m.dt,
+        );
         self.state.ledger.dissipated += d;
     }
 

@@ -63,7 +63,12 @@ fn cases() -> Vec<(&'static str, Scene, u64, bool)> {
         ("coulomb-crack", product_scene("coulomb-crack"), 120, false),
         ("kalthoff-winkler", kw, 200, true),
         ("damped-held-plate", damped_held_plate(), 100, false),
-        ("viscous-held-cracked-plate", viscous_held_cracked_plate(), 150, true),
+        (
+            "viscous-held-cracked-plate",
+            viscous_held_cracked_plate(),
+            150,
+            true,
+        ),
     ]
 }
 

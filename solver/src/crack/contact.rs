@@ -15,16 +15,9 @@ use super::Cracks;
 use super::fields::BODY_CONTACT;
 use super::geometry::norm;
 
-/// The momentum stage at which contact is applied (`algorithm.md` §4, pitfall 4).
-#[derive(Debug, Clone, Copy, PartialEq, Eq)]
-pub enum Stage {
-    /// After P2G (momentum p).
-    Extrapolated,
-    /// After the force update (p + Δt f; forces adjusted by ±Δp/Δt).
-    Forces,
-    /// After re-extrapolation (momentum q).
-    Reextrapolated,
-}
+/// The momentum stage at which contact is applied (`algorithm.md` §4, pitfall 4): the
+/// core's grid stages.
+pub use fracture_mpm::gridops::Stage;
 
 impl Cracks {
     /// Crack-face contact at every node with two fields (§4). Returns the frictional work.

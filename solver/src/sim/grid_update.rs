@@ -2,7 +2,8 @@
 //! wrote, the crack velocity-field table (§3), the active box, nodal velocities and
 //! accelerations (v = p/m, a = f/m, v = q/m), and damping forces.
 
-use fracture_api::scene::Damping;
+use fracture_mpm::Dim2;
+use fracture_mpm::gridops::{self, ActiveBox};
 use rayon::prelude::*;
 
 use super::transfer::Acc;
@@ -13,15 +14,8 @@ use crate::grid::{Node, PAD};
 impl Simulation {
     /// Zero the grid where the last step wrote.
     pub(super) fn reset_grid(&mut self) {
-        let [x0, x1, y0, y1] = self.active_box;
-        if x1 >= x0 && self.active_nodes > 0 {
-            let ny = self.geom.ny();
-            let start = (x0 + PAD) * ny;
-            let end = (x1 + 1 + PAD) * ny;
-            self.nodes[start..end]
-                .par_chunks_mut(ny)
-                .for_each(|col| col[y0..=y1].fill(Node::default()));
-        }
+        let active = self.active();
+        gridops::reset(&self.geom, &mut self.nodes, active, &mut self.col_sums);
         for &i in &self.f1_index {
             self.slot_of[i as usize] = u32::MAX;
         }
@@ -114,87 +108,50 @@ impl Simulation {
             (acc.bx[3] as usize).min(g.ny() - 1),
         ];
         self.active_box = b;
-        let ny = g.ny();
-        let m_tiny = self.m_tiny;
-        let cols = &self.nodes[(b[0] + PAD) * ny..(b[1] + 1 + PAD) * ny];
-        self.active_nodes = cols
-            .par_chunks(ny)
-            .map(|c| c[b[2]..=b[3]].iter().filter(|n| n.m > m_tiny).count())
-            .sum::<usize>()
-            + self.f1.len();
+        self.active_nodes = gridops::count(
+            &g,
+            &mut self.nodes,
+            ([b[0], b[2]], [b[1], b[3]]),
+            &mut self.col_sums,
+            self.m_tiny,
+        ) + self.f1.len();
     }
 
     /// Nodal velocity (p/m after extrapolation, q/m after re-extrapolation) or acceleration
     /// (f/m after the force stage) on every active node and field.
     pub(super) fn nodal(&mut self, stage: Stage) {
-        let m_tiny = self.m_tiny;
-        let set = move |n: &mut Node| {
-            if n.m > m_tiny {
-                let inv = 1.0 / n.m;
-                match stage {
-                    Stage::Extrapolated => n.v = [n.p[0] * inv, n.p[1] * inv],
-                    Stage::Forces => n.a = [n.f[0] * inv, n.f[1] * inv],
-                    Stage::Reextrapolated => n.v = [n.q[0] * inv, n.q[1] * inv],
-                }
-            } else {
-                n.v = [0.0; 2];
-                n.a = [0.0; 2];
-            }
-        };
+        let active = self.active();
+        gridops::nodal(
+            &self.geom,
+            &mut self.nodes,
+            active,
+            &mut self.f1,
+            &mut self.col_sums,
+            stage,
+            self.m_tiny,
+        );
+    }
+
+    /// The active box as the core's grid operations take it (None: nothing active).
+    fn active(&self) -> Option<ActiveBox<Dim2>> {
         let [x0, x1, y0, y1] = self.active_box;
-        let ny = self.geom.ny();
-        if self.active_nodes > 0 {
-            self.nodes[(x0 + PAD) * ny..(x1 + 1 + PAD) * ny]
-                .par_chunks_mut(ny)
-                .for_each(|c| c[y0..=y1].iter_mut().for_each(set));
-        }
-        self.f1.iter_mut().for_each(set);
+        (x1 >= x0 && self.active_nodes > 0).then_some(([x0, y0], [x1, y1]))
     }
 
     /// Damping after the force pass: a grid force against the motion (kinetic: local
     /// non-viscous; viscous: mass-proportional); the work it removes is recorded as
     /// dissipated.
     pub(super) fn damp_forces(&mut self) {
-        let dt = self.dt;
-        let m_tiny = self.m_tiny;
-        let damp = self.damping.clone();
-        if !matches!(damp, Damping::None) {
-            let damp_node = move |n: &mut Node| -> f64 {
-                if n.m <= m_tiny {
-                    return 0.0;
-                }
-                let v = [n.p[0] / n.m, n.p[1] / n.m];
-                match damp {
-                    Damping::Viscous { coefficient } => {
-                        let fd = [coefficient * n.p[0], coefficient * n.p[1]];
-                        n.f[0] -= fd[0];
-                        n.f[1] -= fd[1];
-                        (fd[0] * v[0] + fd[1] * v[1]) * dt
-                    }
-                    Damping::Kinetic { coefficient } => {
-                        let mut d = 0.0;
-                        for k in 0..2 {
-                            let fd = coefficient * n.f[k].abs() * v[k].signum();
-                            n.f[k] -= fd;
-                            d += fd * v[k] * dt;
-                        }
-                        d
-                    }
-                    Damping::None => 0.0,
-                }
-            };
-            let [x0, x1, y0, y1] = self.active_box;
-            let ny = self.geom.ny();
-            let cols = &mut self.nodes[(x0 + PAD) * ny..(x1 + 1 + PAD) * ny];
-            let sums = &mut self.col_sums[..x1 + 1 - x0];
-            cols.par_chunks_mut(ny)
-                .zip(sums.par_iter_mut())
-                .for_each(|(c, s)| *s = c[y0..=y1].iter_mut().map(&damp_node).sum());
-            let mut d: f64 = sums.iter().sum();
-            for n in &mut self.f1 {
-                d += damp_node(n);
-            }
-            self.dissipated += d;
-        }
+        let active = self.active();
+        self.dissipated += gridops::damp(
+            &self.geom,
+            &mut self.nodes,
+            active,
+            &mut self.f1,
+            &mut self.col_sums,
+            &self.damping,
+            self.m_tiny,
+            self.dt,
+        );
     }
 }
