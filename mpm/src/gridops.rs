@@ -69,72 +69,119 @@ pub fn for_box<D: Dim>(
     sums.iter().sum()
 }
 
-/// Zero the nodes of the box.
-pub fn reset<D: Dim>(
+/// `f` on every row of the box of `nodes` (a 2D column's nodes y0..=y1, a 3D row's
+/// z0..=z1), x-planes in parallel.
+pub fn for_rows<D: Dim>(
     geom: &GridGeom<D>,
     nodes: &mut [Node<D>],
-    active: Option<ActiveBox<D>>,
-    plane_sums: &mut [f64],
+    (lo, hi): ActiveBox<D>,
+    f: impl Fn(&mut [Node<D>]) + Sync,
 ) {
-    if let Some(b) = active {
-        for_box(geom, nodes, b, plane_sums, |n| {
-            *n = Node::default();
-            0.0
+    let plane = geom.plane();
+    let (x0, x1) = (lo.as_ref()[0], hi.as_ref()[0]);
+    let planes = &mut nodes[(x0 + PAD) * plane..(x1 + 1 + PAD) * plane];
+    let (y0, y1) = (lo.as_ref()[1], hi.as_ref()[1]);
+    if D::N == 2 {
+        planes
+            .par_chunks_mut(plane)
+            .for_each(|c| f(&mut c[y0..=y1]));
+    } else {
+        let nz = geom.strides.as_ref()[1];
+        let (z0, z1) = (lo.as_ref()[2], hi.as_ref()[2]);
+        planes.par_chunks_mut(plane).for_each(|c| {
+            for iy in y0..=y1 {
+                f(&mut c[iy * nz + z0..=iy * nz + z1]);
+            }
         });
+    }
+}
+
+/// Zero the nodes of the box.
+pub fn reset<D: Dim>(geom: &GridGeom<D>, nodes: &mut [Node<D>], active: Option<ActiveBox<D>>) {
+    if let Some(b) = active {
+        for_rows(geom, nodes, b, |r| r.fill(Node::default()));
     }
 }
 
 /// Nodes of the box with mass above `m_tiny`.
 pub fn count<D: Dim>(
     geom: &GridGeom<D>,
-    nodes: &mut [Node<D>],
-    b: ActiveBox<D>,
-    plane_sums: &mut [f64],
+    nodes: &[Node<D>],
+    (lo, hi): ActiveBox<D>,
     m_tiny: f64,
 ) -> usize {
-    for_box(geom, nodes, b, plane_sums, |n| {
-        if n.m > m_tiny { 1.0 } else { 0.0 }
-    }) as usize
-}
-
-/// The nodal value of one node at `stage`: v = p/m, a = f/m or v = q/m; zero velocity and
-/// acceleration on a node lighter than `m_tiny`.
-#[inline]
-pub fn nodal_node<D: Dim>(n: &mut Node<D>, stage: Stage, m_tiny: f64) {
-    if n.m > m_tiny {
-        let inv = 1.0 / n.m;
-        for d in 0..D::N {
-            match stage {
-                Stage::Extrapolated => n.v.as_mut()[d] = n.p.as_ref()[d] * inv,
-                Stage::Forces => n.a.as_mut()[d] = n.f.as_ref()[d] * inv,
-                Stage::Reextrapolated => n.v.as_mut()[d] = n.q.as_ref()[d] * inv,
-            }
-        }
+    let plane = geom.plane();
+    let (x0, x1) = (lo.as_ref()[0], hi.as_ref()[0]);
+    let planes = &nodes[(x0 + PAD) * plane..(x1 + 1 + PAD) * plane];
+    let (y0, y1) = (lo.as_ref()[1], hi.as_ref()[1]);
+    let heavy = |r: &[Node<D>]| r.iter().filter(|n| n.m > m_tiny).count();
+    if D::N == 2 {
+        planes.par_chunks(plane).map(|c| heavy(&c[y0..=y1])).sum()
     } else {
-        n.v = D::V::default();
-        n.a = D::V::default();
+        let nz = geom.strides.as_ref()[1];
+        let (z0, z1) = (lo.as_ref()[2], hi.as_ref()[2]);
+        planes
+            .par_chunks(plane)
+            .map(|c| {
+                (y0..=y1)
+                    .map(|iy| heavy(&c[iy * nz + z0..=iy * nz + z1]))
+                    .sum::<usize>()
+            })
+            .sum()
     }
 }
 
-/// Nodal values at `stage` on the box and on the field-1 nodes `f1`.
+/// Nodal values at `stage` on the box and on the field-1 nodes `f1`: v = p/m, a = f/m or
+/// v = q/m; zero velocity and acceleration on a node lighter than `m_tiny`.
 pub fn nodal<D: Dim>(
     geom: &GridGeom<D>,
     nodes: &mut [Node<D>],
     active: Option<ActiveBox<D>>,
     f1: &mut [Node<D>],
-    plane_sums: &mut [f64],
     stage: Stage,
     m_tiny: f64,
 ) {
+    // One loop per stage, so the stage is not tested per node.
+    match stage {
+        Stage::Extrapolated => nodal_with(geom, nodes, active, f1, m_tiny, |n, inv| {
+            for d in 0..D::N {
+                n.v.as_mut()[d] = n.p.as_ref()[d] * inv;
+            }
+        }),
+        Stage::Forces => nodal_with(geom, nodes, active, f1, m_tiny, |n, inv| {
+            for d in 0..D::N {
+                n.a.as_mut()[d] = n.f.as_ref()[d] * inv;
+            }
+        }),
+        Stage::Reextrapolated => nodal_with(geom, nodes, active, f1, m_tiny, |n, inv| {
+            for d in 0..D::N {
+                n.v.as_mut()[d] = n.q.as_ref()[d] * inv;
+            }
+        }),
+    }
+}
+
+#[inline(always)]
+fn nodal_with<D: Dim>(
+    geom: &GridGeom<D>,
+    nodes: &mut [Node<D>],
+    active: Option<ActiveBox<D>>,
+    f1: &mut [Node<D>],
+    m_tiny: f64,
+    set: impl Fn(&mut Node<D>, f64) + Sync,
+) {
+    let one = |n: &mut Node<D>| {
+        if n.m > m_tiny {
+            set(n, 1.0 / n.m);
+        } else {
+            n.v = D::V::default();
+            n.a = D::V::default();
+        }
+    };
     if let Some(b) = active {
-        for_box(geom, nodes, b, plane_sums, |n| {
-            nodal_node(n, stage, m_tiny);
-            0.0
-        });
+        for_rows(geom, nodes, b, |r| r.iter_mut().for_each(&one));
     }
-    for n in f1 {
-        nodal_node(n, stage, m_tiny);
-    }
+    f1.iter_mut().for_each(one);
 }
 
 /// The damping force on one node after the force pass, against its motion (kinetic: local

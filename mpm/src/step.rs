@@ -641,12 +641,7 @@ impl<D: Dim> Simulation<D> {
     /// Zero the grid where the last step wrote.
     fn reset_grid(&mut self) {
         let sc = &mut self.scratch;
-        gridops::reset(
-            &self.model.geom,
-            &mut sc.nodes,
-            sc.active,
-            &mut sc.plane_sums,
-        );
+        gridops::reset(&self.model.geom, &mut sc.nodes, sc.active);
     }
 
     /// The active box of a P2G's reduction (clamped) and the number of nodes with mass.
@@ -665,13 +660,7 @@ impl<D: Dim> Simulation<D> {
         }
         self.scratch.active = Some((lo, hi));
         let sc = &mut self.scratch;
-        sc.active_nodes = gridops::count(
-            &g,
-            &mut sc.nodes,
-            (lo, hi),
-            &mut sc.plane_sums,
-            self.model.m_tiny,
-        );
+        sc.active_nodes = gridops::count(&g, &sc.nodes, (lo, hi), self.model.m_tiny);
     }
 
     /// Nodal velocity (p/m, then q/m) or acceleration (f/m) at `stage`.
@@ -679,15 +668,7 @@ impl<D: Dim> Simulation<D> {
         let sc = &mut self.scratch;
         let geom = &self.model.geom;
         let m_tiny = self.model.m_tiny;
-        gridops::nodal(
-            geom,
-            &mut sc.nodes,
-            sc.active,
-            &mut [],
-            &mut sc.plane_sums,
-            stage,
-            m_tiny,
-        );
+        gridops::nodal(geom, &mut sc.nodes, sc.active, &mut [], stage, m_tiny);
     }
 
     /// The loads' ramped tractions at `t0`, and moving conditions' nodes.

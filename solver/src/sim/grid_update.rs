@@ -15,7 +15,7 @@ impl Simulation {
     /// Zero the grid where the last step wrote.
     pub(super) fn reset_grid(&mut self) {
         let active = self.active();
-        gridops::reset(&self.geom, &mut self.nodes, active, &mut self.col_sums);
+        gridops::reset(&self.geom, &mut self.nodes, active);
         for &i in &self.f1_index {
             self.slot_of[i as usize] = u32::MAX;
         }
@@ -108,13 +108,9 @@ impl Simulation {
             (acc.bx[3] as usize).min(g.ny() - 1),
         ];
         self.active_box = b;
-        self.active_nodes = gridops::count(
-            &g,
-            &mut self.nodes,
-            ([b[0], b[2]], [b[1], b[3]]),
-            &mut self.col_sums,
-            self.m_tiny,
-        ) + self.f1.len();
+        self.active_nodes =
+            gridops::count(&g, &self.nodes, ([b[0], b[2]], [b[1], b[3]]), self.m_tiny)
+                + self.f1.len();
     }
 
     /// Nodal velocity (p/m after extrapolation, q/m after re-extrapolation) or acceleration
@@ -126,7 +122,6 @@ impl Simulation {
             &mut self.nodes,
             active,
             &mut self.f1,
-            &mut self.col_sums,
             stage,
             self.m_tiny,
         );
