@@ -247,3 +247,80 @@ pub fn damp<D: Dim>(
     }
     d
 }
+
+/// The fields of node `i`: field 0, and field 1 where the slot map `slot_of` gives it a slot.
+#[inline]
+fn each_field<D: Dim>(
+    nodes: &mut [Node<D>],
+    f1: &mut [Node<D>],
+    slot_of: &[u32],
+    i: usize,
+    mut f: impl FnMut(&mut Node<D>),
+) {
+    f(&mut nodes[i]);
+    let slot = slot_of.get(i).copied().unwrap_or(u32::MAX);
+    if slot != u32::MAX {
+        f(&mut f1[slot as usize]);
+    }
+}
+
+/// A velocity condition on the momenta of every field of the nodes `at` (storage indices):
+/// each prescribed component `v[d]` sets p_d = m v_d (after the P2G) or q_d = m v_d (after the
+/// re-extrapolation, `reextrapolated`); nodes lighter than `m_tiny` are left alone.
+#[allow(clippy::too_many_arguments)]
+pub fn hold_momentum<D: Dim>(
+    nodes: &mut [Node<D>],
+    f1: &mut [Node<D>],
+    slot_of: &[u32],
+    at: &[u32],
+    v: &[Option<f64>],
+    reextrapolated: bool,
+    m_tiny: f64,
+) {
+    for &i in at {
+        each_field(nodes, f1, slot_of, i as usize, |n| {
+            if n.m <= m_tiny {
+                return;
+            }
+            let target = if reextrapolated { &mut n.q } else { &mut n.p };
+            for d in 0..D::N {
+                if let Some(vk) = v[d] {
+                    target.as_mut()[d] = n.m * vk;
+                }
+            }
+        });
+    }
+}
+
+/// A velocity condition after the force pass: on every field of the nodes `at`, the force
+/// that makes p + Δt f meet the prescribed velocity, f_d = (m v_d − p_d)/Δt. The reaction's
+/// work at the node's mid-step velocity, Σ (f_new − f)·½(p/m + v)·Δt, is added to `work` in
+/// node order.
+#[allow(clippy::too_many_arguments)]
+pub fn hold_force<D: Dim>(
+    nodes: &mut [Node<D>],
+    f1: &mut [Node<D>],
+    slot_of: &[u32],
+    at: &[u32],
+    v: &[Option<f64>],
+    m_tiny: f64,
+    dt: f64,
+    work: &mut f64,
+) {
+    for &i in at {
+        each_field(nodes, f1, slot_of, i as usize, |n| {
+            if n.m <= m_tiny {
+                return;
+            }
+            for d in 0..D::N {
+                if let Some(vk) = v[d] {
+                    let p = n.p.as_ref()[d];
+                    let f_new = (n.m * vk - p) / dt;
+                    let v_mid = 0.5 * (p / n.m + vk);
+                    *work += (f_new - n.f.as_ref()[d]) * v_mid * dt;
+                    n.f.as_mut()[d] = f_new;
+                }
+            }
+        });
+    }
+}

@@ -702,18 +702,15 @@ impl<D: Dim> Simulation<D> {
             if v[..D::N].iter().all(Option::is_none) {
                 continue;
             }
-            for &i in &bc.nodes {
-                let n = &mut self.scratch.nodes[i as usize];
-                if n.m <= m_tiny {
-                    continue;
-                }
-                let target = if reextrapolated { &mut n.q } else { &mut n.p };
-                for d in 0..D::N {
-                    if let Some(vk) = v[d] {
-                        target.as_mut()[d] = n.m * vk;
-                    }
-                }
-            }
+            gridops::hold_momentum::<D>(
+                &mut self.scratch.nodes,
+                &mut [],
+                &[],
+                &bc.nodes,
+                &v,
+                reextrapolated,
+                m_tiny,
+            );
         }
     }
 
@@ -728,21 +725,16 @@ impl<D: Dim> Simulation<D> {
             if v[..D::N].iter().all(Option::is_none) {
                 continue;
             }
-            for &i in &bc.nodes {
-                let n = &mut self.scratch.nodes[i as usize];
-                if n.m <= m_tiny {
-                    continue;
-                }
-                for d in 0..D::N {
-                    if let Some(vk) = v[d] {
-                        let p = n.p.as_ref()[d];
-                        let f_new = (n.m * vk - p) / dt;
-                        let v_mid = 0.5 * (p / n.m + vk);
-                        work += (f_new - n.f.as_ref()[d]) * v_mid * dt;
-                        n.f.as_mut()[d] = f_new;
-                    }
-                }
-            }
+            gridops::hold_force::<D>(
+                &mut self.scratch.nodes,
+                &mut [],
+                &[],
+                &bc.nodes,
+                &v,
+                m_tiny,
+                dt,
+                &mut work,
+            );
         }
         let l = &mut self.state.ledger;
         l.external_work += work;

@@ -7,7 +7,9 @@ use fracture_api::Scene;
 use fracture_api::scene::Region;
 
 use super::Simulation;
-use crate::grid::{GridGeom, Node};
+use crate::grid::GridGeom;
+use fracture_mpm::Dim2;
+use fracture_mpm::gridops;
 
 /// A prescribed-velocity condition resolved to grid nodes.
 #[derive(Debug, Clone)]
@@ -187,25 +189,15 @@ impl Simulation {
             if v[0].is_none() && v[1].is_none() {
                 continue;
             }
-            for &i in &bc.nodes {
-                let i = i as usize;
-                let slot = self.slot_of.get(i).copied().unwrap_or(u32::MAX);
-                let apply = |n: &mut Node| {
-                    if n.m <= m_tiny {
-                        return;
-                    }
-                    let target = if reextrapolated { &mut n.q } else { &mut n.p };
-                    for k in 0..2 {
-                        if let Some(vk) = v[k] {
-                            target[k] = n.m * vk;
-                        }
-                    }
-                };
-                apply(&mut self.nodes[i]);
-                if slot != u32::MAX {
-                    apply(&mut self.f1[slot as usize]);
-                }
-            }
+            gridops::hold_momentum::<Dim2>(
+                &mut self.nodes,
+                &mut self.f1,
+                &self.slot_of,
+                &bc.nodes,
+                &v,
+                reextrapolated,
+                m_tiny,
+            );
         }
     }
 
@@ -220,27 +212,16 @@ impl Simulation {
             if v[0].is_none() && v[1].is_none() {
                 continue;
             }
-            for &i in &bc.nodes {
-                let i = i as usize;
-                let slot = self.slot_of.get(i).copied().unwrap_or(u32::MAX);
-                let mut apply = |n: &mut Node| {
-                    if n.m <= m_tiny {
-                        return;
-                    }
-                    for k in 0..2 {
-                        if let Some(vk) = v[k] {
-                            let f_new = (n.m * vk - n.p[k]) / dt;
-                            let v_mid = 0.5 * (n.p[k] / n.m + vk);
-                            work += (f_new - n.f[k]) * v_mid * dt;
-                            n.f[k] = f_new;
-                        }
-                    }
-                };
-                apply(&mut self.nodes[i]);
-                if slot != u32::MAX {
-                    apply(&mut self.f1[slot as usize]);
-                }
-            }
+            gridops::hold_force::<Dim2>(
+                &mut self.nodes,
+                &mut self.f1,
+                &self.slot_of,
+                &bc.nodes,
+                &v,
+                m_tiny,
+                dt,
+                &mut work,
+            );
         }
         self.external_work += work;
         self.work_abs += work.abs();
