@@ -25,6 +25,7 @@ pub mod particles;
 pub mod passes;
 pub mod scenes;
 pub mod shape;
+pub mod sort;
 pub mod state;
 pub mod stencil;
 pub mod step;

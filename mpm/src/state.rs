@@ -240,14 +240,8 @@ pub struct Scratch<D: Dim> {
     pub active_nodes: usize,
     /// Loads' ramped tractions of the step in progress.
     pub load_now: Vec<D::V>,
-    /// Sort keys, counts and permutation.
-    pub sort_keys: Vec<u32>,
-    /// Counting-sort counts.
-    pub sort_count: Vec<u32>,
-    /// Counting-sort destinations.
-    pub sort_perm: Vec<u32>,
-    /// Sort buffers.
-    pub spare: Particles<D>,
+    /// The sort's work arrays.
+    pub sorter: crate::sort::SortScratch<D>,
     /// Per-plane partial sums (damping).
     pub plane_sums: Vec<f64>,
     /// Pass wall times.

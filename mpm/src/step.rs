@@ -12,11 +12,12 @@ use std::time::Instant;
 
 use crate::backend::{Backend, Cpu};
 use crate::dim::Dim;
-use crate::grid::{GridGeom, Node, STRIP};
+use crate::grid::{GridGeom, Node};
 use crate::gridops::{self, Stage};
 use crate::math::Kernel;
 use crate::particles::Particles;
 use crate::passes::{Acc, FAIL_GRID, FAIL_POSITION, FAIL_VELOCITY, Grid, PassCx};
+use crate::sort::{SortScratch, sort_by_cell};
 use crate::state::{BcNodes, Ledger, Model, PassTimes, Region, Scratch, Spec, State};
 
 /// Why a simulation could not be built.
@@ -238,7 +239,6 @@ impl<D: Dim> Simulation<D> {
                 shift: D::V::default(),
             })
             .collect();
-        let n = spec.particles.len();
         let c_max = spec.materials.iter().map(|m| m.c_l).fold(0.0, f64::max);
         let mass_total: f64 = spec.particles.mech.iter().map(|m| m.m).sum();
         let model = Model {
@@ -258,21 +258,12 @@ impl<D: Dim> Simulation<D> {
             pool: std::sync::Arc::new(pool),
             scene_hash: spec.scene_hash,
         };
-        let mut spare = Particles::<D>::default();
-        spare.kin.resize(n, Default::default());
-        spare.mech.resize(n, Default::default());
-        spare.stress.resize(n, Default::default());
-        spare.cold.resize(n, Default::default());
-        spare.wden.resize(n, 0.0);
         let scratch = Scratch {
             nodes: vec![Node::default(); geom.storage_len()],
             active: None,
             active_nodes: 0,
             load_now: vec![D::V::default(); spec.loads.len()],
-            sort_keys: vec![0; n],
-            sort_count: Vec::new(),
-            sort_perm: vec![0; n],
-            spare,
+            sorter: SortScratch::default(),
             plane_sums: vec![0.0; geom.cols],
             times: PassTimes::default(),
             nodes_alt: Vec::new(),
@@ -531,66 +522,25 @@ impl<D: Dim> Simulation<D> {
 
     /// Counting sort of the particles by cell (x-plane major), and the strip bounds.
     fn sort(&mut self) -> Result<(), StepError> {
-        let geom = self.model.geom;
-        let mut nc = [1usize; 3];
-        for d in 0..D::N {
-            nc[d] = geom.n.as_ref()[d] - 1;
+        let st = &mut self.state;
+        let sorted = sort_by_cell(
+            &self.model.geom,
+            &mut st.parts,
+            &mut st.strip_bounds,
+            &mut self.scratch.sorter,
+        );
+        if let Err(i) = sorted {
+            let k = st.parts.kin[i];
+            let mut position = [0.0; 3];
+            position[..D::N].copy_from_slice(k.x.as_ref());
+            return Err(StepError::LeftGrid {
+                step: st.steps,
+                particle: st.parts.cold[i].id as usize,
+                position,
+                dims: D::N,
+            });
         }
-        let ncells: usize = nc.iter().product();
-        let plane_cells = ncells / nc[0];
-        let sc = &mut self.scratch;
-        let p = &mut self.state.parts;
-        for (i, k) in p.kin.iter().enumerate() {
-            let c = geom.cell(&k.x);
-            let mut key = 0usize;
-            for d in 0..D::N {
-                if c[d] < 1 || c[d] as usize + 2 > nc[d] {
-                    let mut position = [0.0; 3];
-                    position[..D::N].copy_from_slice(k.x.as_ref());
-                    return Err(StepError::LeftGrid {
-                        step: self.state.steps,
-                        particle: p.cold[i].id as usize,
-                        position,
-                        dims: D::N,
-                    });
-                }
-                key = key * nc[d] + c[d] as usize;
-            }
-            sc.sort_keys[i] = key as u32;
-        }
-        sc.sort_count.clear();
-        sc.sort_count.resize(ncells + 1, 0);
-        for &k in &sc.sort_keys {
-            sc.sort_count[k as usize + 1] += 1;
-        }
-        for c in 0..ncells {
-            sc.sort_count[c + 1] += sc.sort_count[c];
-        }
-        // Strip bounds: first particle with cell plane ≥ s·STRIP.
-        for s in 0..=geom.strips {
-            let col = (s * STRIP).min(nc[0]);
-            self.state.strip_bounds[s] = sc.sort_count[col * plane_cells] as usize;
-        }
-        for (i, &k) in sc.sort_keys.iter().enumerate() {
-            let dst = &mut sc.sort_count[k as usize];
-            sc.sort_perm[i] = *dst;
-            *dst += 1;
-        }
-        let s = &mut sc.spare;
-        for (i, &d) in sc.sort_perm.iter().enumerate() {
-            let d = d as usize;
-            s.kin[d] = p.kin[i];
-            s.mech[d] = p.mech[i];
-            s.stress[d] = p.stress[i];
-            s.wden[d] = p.wden[i];
-            s.cold[d] = p.cold[i];
-        }
-        std::mem::swap(&mut p.kin, &mut s.kin);
-        std::mem::swap(&mut p.mech, &mut s.mech);
-        std::mem::swap(&mut p.stress, &mut s.stress);
-        std::mem::swap(&mut p.wden, &mut s.wden);
-        std::mem::swap(&mut p.cold, &mut s.cold);
-        self.state.needs_sort = false;
+        st.needs_sort = false;
         Ok(())
     }
 

@@ -118,19 +118,7 @@ impl Simulation {
             pool: std::sync::Arc::new(pool),
             load_now: vec![[0.0; 2]; scene.loads.len()],
             threads,
-            sort_keys: vec![0; n],
-            sort_count: Vec::new(),
-            sort_perm: vec![0; n],
-            scratch_kin: vec![Kin::default(); n],
-            scratch_mech: vec![Mech::default(); n],
-            scratch_stress: vec![[0.0; 4]; n],
-            scratch_wden: vec![0.0; n],
-            scratch_cold: vec![Cold::default(); n],
-            scratch_grad: if !multi_field {
-                Vec::new()
-            } else {
-                vec![[0.0; 4]; n]
-            },
+            sorter: Default::default(),
             col_sums: vec![0.0; geom.cols],
             parts,
             cracks: None,

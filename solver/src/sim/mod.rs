@@ -36,7 +36,7 @@ use crate::crack::Cracks;
 pub use crate::crack::Stage;
 use crate::grid::{GridGeom, Node};
 use crate::material::Elastic;
-use crate::particles::{Cold, Kin, Mech, Particles};
+use crate::particles::Particles;
 use boundary::{BcNodes, LoadForce};
 pub use checkpoint::{CHECKPOINT_FORMAT, CheckpointError, checkpoint_steps};
 pub use config::{Parallelism, SolverConfig};
@@ -93,15 +93,8 @@ pub struct Simulation {
     load_now: Vec<[f64; 2]>,
     threads: usize,
     // Sort scratch.
-    sort_keys: Vec<u32>,
-    sort_count: Vec<u32>,
-    sort_perm: Vec<u32>,
-    scratch_kin: Vec<Kin>,
-    scratch_mech: Vec<Mech>,
-    scratch_stress: Vec<[f64; 4]>,
-    scratch_wden: Vec<f64>,
-    scratch_cold: Vec<Cold>,
-    scratch_grad: Vec<[f64; 4]>,
+    /// The sort's work arrays.
+    sorter: fracture_mpm::sort::SortScratch<fracture_mpm::Dim2>,
     col_sums: Vec<f64>,
     cracks: Option<Box<Cracks>>,
     counters: WorkCounters,
