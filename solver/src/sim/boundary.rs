@@ -223,7 +223,7 @@ impl Simulation {
                 &mut work,
             );
         }
-        self.external_work += work;
-        self.work_abs += work.abs();
+        self.ledger.external_work += work;
+        self.ledger.work_abs += work.abs();
     }
 }

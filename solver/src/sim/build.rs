@@ -108,13 +108,8 @@ impl Simulation {
             // strains a rigidly moving body.
             m_tiny: f64::MIN_POSITIVE,
             m_snapshot: 1e-9 * m_min,
-            kinetic: 0.0,
-            strain: 0.0,
-            external_work: 0.0,
-            dissipated: 0.0,
-            initial_total: 0.0,
+            ledger: fracture_mpm::Ledger::default(),
             energy_scale: 1e-12 * mass_total * c_max * c_max,
-            work_abs: 0.0,
             pool: std::sync::Arc::new(pool),
             load_now: vec![[0.0; 2]; scene.loads.len()],
             threads,
@@ -139,8 +134,8 @@ impl Simulation {
             sim.parts.grad_u = vec![[0.0; 4]; n];
             sim.cracks = Some(Box::new(Cracks::new(scene, &sim.geom, &sim.mats, sim.dt)));
         }
-        sim.kinetic = sim.kinetic_energy();
-        sim.initial_total = sim.kinetic;
+        sim.ledger.kinetic = sim.kinetic_energy();
+        sim.ledger.initial_total = sim.ledger.kinetic;
         Ok(sim)
     }
 
@@ -152,8 +147,10 @@ impl Simulation {
         }
         // A P2G done ahead by the last fused step used the old velocities.
         self.prefetched = None;
-        self.kinetic = self.kinetic_energy();
-        self.initial_total = self.kinetic + self.strain + self.dissipated - self.external_work;
+        self.ledger.kinetic = self.kinetic_energy();
+        self.ledger.initial_total =
+            self.ledger.kinetic + self.ledger.strain + self.ledger.dissipated
+                - self.ledger.external_work;
     }
 
     fn kinetic_energy(&self) -> f64 {

@@ -150,12 +150,12 @@ impl Simulation {
             strip_bounds: &self.strip_bounds,
             time: self.time,
             steps: self.steps,
-            kinetic: self.kinetic,
-            strain: self.strain,
-            external_work: self.external_work,
-            dissipated: self.dissipated,
-            initial_total: self.initial_total,
-            work_abs: self.work_abs,
+            kinetic: self.ledger.kinetic,
+            strain: self.ledger.strain,
+            external_work: self.ledger.external_work,
+            dissipated: self.ledger.dissipated,
+            initial_total: self.ledger.initial_total,
+            work_abs: self.ledger.work_abs,
             counters: self.counters,
         };
         // Serializing plain data into a Vec cannot fail (no maps with non-string keys, no
@@ -262,12 +262,12 @@ impl Simulation {
         sim.strip_bounds = st.strip_bounds;
         sim.time = st.time;
         sim.steps = st.steps;
-        sim.kinetic = st.kinetic;
-        sim.strain = st.strain;
-        sim.external_work = st.external_work;
-        sim.dissipated = st.dissipated;
-        sim.initial_total = st.initial_total;
-        sim.work_abs = st.work_abs;
+        sim.ledger.kinetic = st.kinetic;
+        sim.ledger.strain = st.strain;
+        sim.ledger.external_work = st.external_work;
+        sim.ledger.dissipated = st.dissipated;
+        sim.ledger.initial_total = st.initial_total;
+        sim.ledger.work_abs = st.work_abs;
         sim.counters = st.counters;
         Ok(sim)
     }

@@ -138,7 +138,7 @@ impl Simulation {
     /// dissipated.
     pub(super) fn damp_forces(&mut self) {
         let active = self.active();
-        self.dissipated += gridops::damp(
+        self.ledger.dissipated += gridops::damp(
             &self.geom,
             &mut self.nodes,
             active,

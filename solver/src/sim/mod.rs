@@ -82,13 +82,9 @@ pub struct Simulation {
     /// Nodes lighter than this are left empty (NaN) in snapshots.
     m_snapshot: f64,
     // Energies.
-    kinetic: f64,
-    strain: f64,
-    external_work: f64,
-    dissipated: f64,
-    initial_total: f64,
+    /// The energy ledger (the core's).
+    ledger: fracture_mpm::Ledger,
     energy_scale: f64,
-    work_abs: f64,
     pool: std::sync::Arc<rayon::ThreadPool>,
     load_now: Vec<[f64; 2]>,
     threads: usize,
@@ -159,9 +155,9 @@ impl Simulation {
         // Pass 3: particle update and re-extrapolation; BCs and contact on the new momenta.
         let acc = self.pass_update();
         self.check(&acc)?;
-        self.kinetic = acc.e;
-        self.external_work += acc.w;
-        self.work_abs += acc.w.abs();
+        self.ledger.kinetic = acc.e;
+        self.ledger.external_work += acc.w;
+        self.ledger.work_abs += acc.w.abs();
         self.needs_sort |= acc.resort;
         self.apply_bc_momentum(t1, true);
         self.bond_hold();
@@ -184,7 +180,7 @@ impl Simulation {
         // Pass 4: second stress half-update; positions committed.
         let acc = self.pass_strain_last();
         self.check(&acc)?;
-        self.strain = acc.e;
+        self.ledger.strain = acc.e;
 
         self.time = t1;
         self.steps += 1;
@@ -193,8 +189,9 @@ impl Simulation {
         let grew = self.propagate()?;
 
         // Energy blow-up: kinetic + strain far above everything ever put in.
-        let energy = self.kinetic + self.strain;
-        let reference = self.initial_total.abs() + self.work_abs + self.dissipated;
+        let energy = self.ledger.kinetic + self.ledger.strain;
+        let reference =
+            self.ledger.initial_total.abs() + self.ledger.work_abs + self.ledger.dissipated;
         if !energy.is_finite() || energy > 10.0 * reference + self.energy_scale {
             return Err(StepError::EnergyBlowUp {
                 step: self.steps,
@@ -255,7 +252,7 @@ impl Simulation {
                 self.m_tiny,
                 self.dt,
             );
-            self.dissipated += d;
+            self.ledger.dissipated += d;
         }
     }
 
@@ -270,7 +267,7 @@ impl Simulation {
                 &self.slot_of,
                 self.dt,
             );
-            self.dissipated += w;
+            self.ledger.dissipated += w;
         }
     }
 

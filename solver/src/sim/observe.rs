@@ -91,13 +91,13 @@ impl Simulation {
     pub fn energy(&self) -> EnergyRow {
         EnergyRow {
             time: self.time,
-            kinetic: self.kinetic,
-            strain: self.strain,
-            external_work: self.external_work,
-            dissipated: self.dissipated,
-            total_error: self.kinetic + self.strain + self.dissipated
-                - self.external_work
-                - self.initial_total,
+            kinetic: self.ledger.kinetic,
+            strain: self.ledger.strain,
+            external_work: self.ledger.external_work,
+            dissipated: self.ledger.dissipated,
+            total_error: self.ledger.kinetic + self.ledger.strain + self.ledger.dissipated
+                - self.ledger.external_work
+                - self.ledger.initial_total,
             fracture: self.cracks.as_ref().map_or(0.0, |c| c.zone_work()),
         }
     }
