@@ -15,6 +15,7 @@
 #![allow(clippy::needless_range_loop)]
 
 pub mod backend;
+pub mod bc;
 pub mod checkpoint;
 pub mod dim;
 pub mod fracture;

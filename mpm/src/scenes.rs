@@ -46,18 +46,7 @@ pub fn spec_2d(valid: &ValidScene, threads: usize) -> Spec<Dim2> {
         shape: scene.grid.shape_function,
         materials,
         particles: Particles::default(),
-        bcs: scene
-            .boundary_conditions
-            .iter()
-            .map(|bc| BcSpec {
-                region: region_2d(&bc.region),
-                velocity: [bc.velocity.x, bc.velocity.y, None],
-                ramp: bc.ramp_time.unwrap_or(0.0),
-                start: bc.start.unwrap_or(0.0),
-                end: bc.end.unwrap_or(f64::INFINITY),
-                moving: bc.moving,
-            })
-            .collect(),
+        bcs: bc_specs_2d(scene),
         loads: scene
             .loads
             .iter()
@@ -96,4 +85,20 @@ pub fn spec_2d(valid: &ValidScene, threads: usize) -> Spec<Dim2> {
         );
     });
     spec
+}
+
+/// A 2D scene's velocity conditions as the core's specs (scene order).
+pub fn bc_specs_2d(scene: &fracture_api::Scene) -> Vec<BcSpec<Dim2>> {
+    scene
+        .boundary_conditions
+        .iter()
+        .map(|bc| BcSpec {
+            region: region_2d(&bc.region),
+            velocity: [bc.velocity.x, bc.velocity.y, None],
+            ramp: bc.ramp_time.unwrap_or(0.0),
+            start: bc.start.unwrap_or(0.0),
+            end: bc.end.unwrap_or(f64::INFINITY),
+            moving: bc.moving,
+        })
+        .collect()
 }

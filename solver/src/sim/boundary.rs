@@ -4,138 +4,21 @@
 //! ramped to the start of the step for the particle passes.
 
 use fracture_api::Scene;
-use fracture_api::scene::Region;
 
 use super::Simulation;
 use crate::grid::GridGeom;
 use fracture_mpm::Dim2;
 use fracture_mpm::gridops;
 
-/// A prescribed-velocity condition resolved to grid nodes.
-#[derive(Debug, Clone)]
-pub(super) struct BcNodes {
-    nodes: Vec<u32>,
-    vx: Option<f64>,
-    vy: Option<f64>,
-    ramp: f64,
-    start: f64,
-    end: f64,
-    /// The scene's region, for a moving condition (None: fixed, `nodes` resolved once).
-    moving: Option<Region>,
-    /// The displacement the nodes of a moving condition were last resolved for.
-    shift: [f64; 2],
-}
+/// A prescribed-velocity condition resolved to grid nodes (the core's, `fracture_mpm::bc`).
+pub(super) type BcNodes = fracture_mpm::state::BcNodes<Dim2>;
 
-/// The node storage indices inside `region` translated by `shift` (only the nodes in its
-/// translated bounding box are tested).
-fn nodes_in(region: &Region, shift: [f64; 2], geom: &GridGeom) -> Vec<u32> {
-    let (lo, hi) = region.bounds();
-    let (lo, hi) = (
-        [lo[0] + shift[0], lo[1] + shift[1]],
-        [hi[0] + shift[0], hi[1] + shift[1]],
-    );
-    let (a, b) = (geom.xi(&lo), geom.xi(&hi));
-    // One node of margin each side: `contains` decides, not the rounding of ξ.
-    let range = |lo: f64, hi: f64, n: usize| -> (usize, usize) {
-        let first = (lo.ceil() - 1.0).max(0.0);
-        let last = (hi.floor() + 1.0).min(n as f64 - 1.0);
-        if !(first.is_finite() && last.is_finite()) || last < first {
-            return (1, 0);
-        }
-        (first as usize, last as usize)
-    };
-    let (x0, x1) = range(a[0], b[0], geom.nx());
-    let (y0, y1) = range(a[1], b[1], geom.ny());
-    let mut nodes = Vec::new();
-    for ix in x0..=x1 {
-        for iy in y0..=y1 {
-            let p = geom.pos(ix, iy);
-            if region.contains([p[0] - shift[0], p[1] - shift[1]]) {
-                nodes.push(geom.at(ix, iy) as u32);
-            }
-        }
-    }
-    nodes
-}
-
-impl BcNodes {
-    /// The scene's velocity conditions, each with the grid nodes inside its region.
-    pub(super) fn resolve(scene: &Scene, geom: &GridGeom) -> Vec<BcNodes> {
-        scene
-            .boundary_conditions
-            .iter()
-            .map(|bc| BcNodes {
-                nodes: nodes_in(&bc.region, [0.0; 2], geom),
-                vx: bc.velocity.x,
-                vy: bc.velocity.y,
-                ramp: bc.ramp_time.unwrap_or(0.0),
-                start: bc.start.unwrap_or(0.0),
-                end: bc.end.unwrap_or(f64::INFINITY),
-                moving: bc.moving.then(|| bc.region.clone()),
-                shift: [0.0; 2],
-            })
-            .collect()
-    }
-
-    /// The displacement of the prescribed components from 0 to `t`: ∫ v(τ) dτ over the
-    /// active interval, with the ramp v·min(τ/ramp, 1) that [`BcNodes::velocity`] applies
-    /// (in closed form, so a resumed run resolves the same nodes).
-    fn displacement(&self, t: f64) -> [f64; 2] {
-        let (a, b) = (self.start, t.min(self.end));
-        if b <= a {
-            return [0.0; 2];
-        }
-        // F(τ) = ∫_0^τ min(s/R, 1) ds.
-        let r = self.ramp;
-        let big_f = |tau: f64| {
-            if r <= 0.0 {
-                tau
-            } else if tau <= r {
-                tau * tau / (2.0 * r)
-            } else {
-                0.5 * r + (tau - r)
-            }
-        };
-        let d = big_f(b) - big_f(a);
-        [self.vx.unwrap_or(0.0) * d, self.vy.unwrap_or(0.0) * d]
-    }
-
-    /// A moving condition: resolve its nodes for the displacement at `t` (when it moved
-    /// since the last time).
-    pub(super) fn follow(&mut self, t: f64, geom: &GridGeom) {
-        let Some(region) = &self.moving else {
-            return;
-        };
-        let d = self.displacement(t);
-        // The face a node stands for is the nearest one: a node half a cell behind the
-        // moved face is released, one less than half a cell ahead is driven (resolving the
-        // region at the displacement itself lags the face by half a cell on average: the
-        // 1D strip then took 2.6 % / 4.6 % too little momentum at 0.5 / 0.25 mm).
-        let len = d[0].hypot(d[1]);
-        let shift = if len > 0.0 {
-            let k = 1.0 + 0.5 * geom.h / len;
-            [d[0] * k, d[1] * k]
-        } else {
-            d
-        };
-        if shift != self.shift {
-            self.nodes = nodes_in(region, shift, geom);
-            self.shift = shift;
-        }
-    }
-
-    /// Prescribed velocity components at time t (None where free or inactive).
-    pub(super) fn velocity(&self, t: f64) -> [Option<f64>; 2] {
-        if t < self.start || t > self.end {
-            return [None, None];
-        }
-        let r = if self.ramp > 0.0 {
-            (t / self.ramp).min(1.0)
-        } else {
-            1.0
-        };
-        [self.vx.map(|v| v * r), self.vy.map(|v| v * r)]
-    }
+/// The scene's velocity conditions, each with the grid nodes inside its region.
+pub(super) fn resolve_bcs(scene: &Scene, geom: &GridGeom) -> Vec<BcNodes> {
+    fracture_mpm::scenes::bc_specs_2d(scene)
+        .into_iter()
+        .map(|s| BcNodes::new(s, geom))
+        .collect()
 }
 
 /// A traction load: traction × thickness (N/m) and its ramp time.
@@ -186,7 +69,7 @@ impl Simulation {
         let m_tiny = self.m_tiny;
         for bc in &self.bcs {
             let v = bc.velocity(t);
-            if v[0].is_none() && v[1].is_none() {
+            if v[..2].iter().all(Option::is_none) {
                 continue;
             }
             gridops::hold_momentum::<Dim2>(
@@ -194,7 +77,7 @@ impl Simulation {
                 &mut self.f1,
                 &self.slot_of,
                 &bc.nodes,
-                &v,
+                &v[..2],
                 reextrapolated,
                 m_tiny,
             );
@@ -209,7 +92,7 @@ impl Simulation {
         let mut work = 0.0;
         for bc in &self.bcs {
             let v = bc.velocity(t1);
-            if v[0].is_none() && v[1].is_none() {
+            if v[..2].iter().all(Option::is_none) {
                 continue;
             }
             gridops::hold_force::<Dim2>(
@@ -217,7 +100,7 @@ impl Simulation {
                 &mut self.f1,
                 &self.slot_of,
                 &bc.nodes,
-                &v,
+                &v[..2],
                 m_tiny,
                 dt,
                 &mut work,

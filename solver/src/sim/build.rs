@@ -6,7 +6,7 @@
 use fracture_api::ValidScene;
 use fracture_api::scene::Analysis;
 
-use super::boundary::{BcNodes, LoadForce};
+use super::boundary::{LoadForce, resolve_bcs};
 use super::{BuildError, Simulation, SolverConfig, WorkCounters};
 use crate::crack::Cracks;
 use crate::grid::{GridGeom, Node};
@@ -75,7 +75,7 @@ impl Simulation {
         let m_min = parts.mech.iter().map(|m| m.m).fold(f64::INFINITY, f64::min);
 
         // Boundary conditions resolved to nodes.
-        let bcs = BcNodes::resolve(scene, &geom);
+        let bcs = resolve_bcs(scene, &geom);
         let loads = LoadForce::resolve(scene);
 
         let c_max = mats.iter().map(|m| m.c_l).fold(0.0, f64::max);
