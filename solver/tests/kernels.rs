@@ -19,7 +19,6 @@ use common::*;
 use fracture_api::Scene;
 use fracture_solver::Simulation;
 use fracture_solver::kernel::Kernel;
-use serde_json::json;
 
 /// Position, velocity, stress and strain energy density of every particle.
 fn state(sim: &Simulation) -> Vec<[f64; 9]> {
@@ -56,35 +55,11 @@ fn kernels() -> Vec<Kernel> {
 }
 
 fn uncracked() -> Scene {
-    scene(json!({
-        "grid": {"cell_size": 0.001, "min": [0.0, 0.0], "max": [0.06, 0.03]},
-        "materials": {"m": homalite()},
-        "bodies": [{"material": "m", "region": {"rectangle": {"min": [0.004, 0.004], "max": [0.036, 0.026]}}}],
-        "boundary_conditions": [{"region": {"rectangle": {"min": [0.0, 0.0], "max": [0.06, 0.0041]}},
-                                 "velocity": {"y": 0.0}}],
-        "loads": [{"region": {"rectangle": {"min": [0.0, 0.0255], "max": [1.0, 1.0]}},
-                   "traction": [1.0e6, 2.0e6], "ramp_time": 2.0e-6}],
-        "damping": {"kind": "kinetic", "coefficient": 0.05},
-        "time": {"end": 2.0e-5}
-    }))
+    scene(held_plate_json(0.06))
 }
 
 fn cracked() -> Scene {
-    let h = 0.001;
-    let m = 2.0 * h;
-    scene(json!({
-        "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [0.044, 0.044]},
-        "materials": {"m": homalite()},
-        "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [0.042, 0.042]}}}],
-        "cracks": [{"points": [[m - 0.5 * h, 0.0225], [0.015, 0.0225]],
-                    "j_integral": {"method": "domain", "radius": 6.0 * h},
-                    "propagation": {"criterion": "energy_release", "toughness": 5.0}}],
-        "loads": [
-            {"region": {"rectangle": {"min": [0.0, 0.0415], "max": [1.0, 1.0]}}, "traction": [0.0, 2.0e6], "ramp_time": 5.0e-6},
-            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, 0.0025]}}, "traction": [0.0, -2.0e6], "ramp_time": 5.0e-6}
-        ],
-        "time": {"end": 2.0e-5}
-    }))
+    scene(edge_cracked_plate_json())
 }
 
 #[test]
