@@ -21,14 +21,6 @@ use super::Machine;
 use super::command::{BenchArgs, CaseArg, KernelArg};
 use crate::report::{markdown_table, sig, write_file};
 
-/// The core's kernel of the 2D solver's kernel choice (the same two arithmetics).
-pub fn core_kernel(k: fracture_solver::kernel::Kernel) -> Kernel {
-    match k {
-        fracture_solver::kernel::Kernel::Portable => Kernel::Portable,
-        fracture_solver::kernel::Kernel::Fma => Kernel::Fma,
-    }
-}
-
 /// Cell size of the 3D block (m).
 pub const CELL: f64 = 0.001;
 
@@ -159,7 +151,12 @@ pub fn bytes_model(dims: usize, nodes_per_particle: f64) -> f64 {
     let stress = if dims == 3 { 6.0 * f } else { 4.0 * f };
     let wden = f;
     let wts = 20.0 * d;
-    let node = f * (1.0 + 5.0 * d);
+    // The node as laid out (mass, p, f, q, u, v, a): size_of, so the model follows the layout.
+    let node = if dims == 3 {
+        std::mem::size_of::<fracture_mpm::grid::Node<fracture_mpm::Dim3>>()
+    } else {
+        std::mem::size_of::<fracture_mpm::grid::Node<fracture_mpm::Dim2>>()
+    } as f64;
     let particle = (2.0 * wts + kin + mech) // P2G: weights written, kin and mech read
         + (wts + mech + 2.0 * stress + 2.0 * wden) // forces
         + (wts + mech + 2.0 * kin) // update
@@ -248,7 +245,7 @@ pub fn instructions_3d(cells: usize, steps: u64, kernel: KernelArg) -> anyhow::R
 /// block and of the 2D solver's seed block (0.5 mm cells, no crack).
 pub fn run(a: &BenchArgs, out: Option<&Path>) -> anyhow::Result<Report> {
     let machine = Machine::now();
-    let kernel = core_kernel(a.kernel.kernel()?);
+    let kernel = a.kernel.kernel()?;
     let reps = a.pairs.max(1);
     let mut rows = Vec::new();
     for &threads in &a.thread_counts {

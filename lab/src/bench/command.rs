@@ -333,7 +333,7 @@ fn throughput(a: &BenchArgs) -> anyhow::Result<Result<Throughput, String>> {
 /// The single run of the 3D block (`--dim 3`).
 fn throughput_3d(a: &BenchArgs) -> anyhow::Result<Result<Throughput, String>> {
     let threads = a.threads.resolve();
-    let kernel = crate::bench::block3d::core_kernel(a.kernel.kernel()?);
+    let kernel = a.kernel.kernel()?;
     let r = crate::bench::block3d::time_block(
         a.cells,
         a.particles_per_cell,
