@@ -69,10 +69,11 @@ pub enum VtkError {
 /// The files of an exported series.
 #[derive(Debug, Clone, PartialEq)]
 pub struct VtkSeries {
-    /// The grid time series: open this in ParaView.
+    /// The grid time series: open this in ParaView (for a 3D run's slices: every plane, one
+    /// part each).
     pub fields_pvd: PathBuf,
-    /// The crack time series.
-    pub cracks_pvd: PathBuf,
+    /// The crack time series (2D runs; a 3D slice series has none).
+    pub cracks_pvd: Option<PathBuf>,
     /// The particle time series, when the snapshots carry particles.
     pub particles_pvd: Option<PathBuf>,
     /// Every file written, the two `.pvd` first.
@@ -89,23 +90,52 @@ pub fn crack_file_name(k: usize) -> String {
     format!("cracks_{k:05}.vtp")
 }
 
-/// `velocity` = (vx, vy, 0) and `displacement` = (ux, uy, 0) as 3-component point arrays,
-/// for those of them whose two components are among `components`.
+/// `velocity` = (vx, vy, vz) and `displacement` = (ux, uy, uz) as 3-component point arrays
+/// (the z component 0 where the snapshot has none: 2D), for those whose x and y components
+/// are among `components`.
 fn vectors(components: &[FieldComponent]) -> Vec<Attribute> {
     let find = |name: &str| components.iter().find(|c| c.name == name);
-    [("velocity", "vx", "vy"), ("displacement", "ux", "uy")]
-        .into_iter()
-        .filter_map(|(name, a, b)| {
-            let (a, b) = (find(a)?, find(b)?);
-            let v: Vec<f32> = a
-                .values
-                .iter()
-                .zip(&b.values)
-                .flat_map(|(&x, &y)| [x, y, 0.0])
-                .collect();
-            Some(Attribute::DataArray(DataArray::vectors(name).with_data(v)))
-        })
-        .collect()
+    [
+        ("velocity", "vx", "vy", "vz"),
+        ("displacement", "ux", "uy", "uz"),
+    ]
+    .into_iter()
+    .filter_map(|(name, a, b, c)| {
+        let (a, b) = (find(a)?, find(b)?);
+        let c = find(c);
+        let v: Vec<f32> = a
+            .values
+            .iter()
+            .zip(&b.values)
+            .enumerate()
+            .flat_map(|(i, (&x, &y))| [x, y, c.map_or(0.0, |c| c.values[i])])
+            .collect();
+        Some(Attribute::DataArray(DataArray::vectors(name).with_data(v)))
+    })
+    .collect()
+}
+
+/// Where a snapshot's image lies in space: its extent and origin. A 2D snapshot is the plane
+/// z = 0; a 3D slice (`Snapshot::slice`) is its node plane at `node_at` along its normal, its
+/// two axes the snapshot's x and y, so a slice series opens in place in ParaView.
+fn placement(snap: &Snapshot) -> (Extent, [f32; 3]) {
+    let (nx, ny) = ((snap.nx as i32 - 1).max(0), (snap.ny as i32 - 1).max(0));
+    let (o0, o1) = (snap.origin[0] as f32, snap.origin[1] as f32);
+    match &snap.slice {
+        Some(sl) if sl.normal == "x" => (
+            Extent::Ranges([0..=0, 0..=nx, 0..=ny]),
+            [sl.node_at as f32, o0, o1],
+        ),
+        Some(sl) if sl.normal == "y" => (
+            Extent::Ranges([0..=nx, 0..=0, 0..=ny]),
+            [o0, sl.node_at as f32, o1],
+        ),
+        Some(sl) => (
+            Extent::Ranges([0..=nx, 0..=ny, 0..=0]),
+            [o0, o1, sl.node_at as f32],
+        ),
+        None => (Extent::Ranges([0..=nx, 0..=ny, 0..=0]), [o0, o1, 0.0]),
+    }
 }
 
 /// Name of the particle file of the `k`-th snapshot of a series.
@@ -203,11 +233,7 @@ pub fn image_data(snap: &Snapshot) -> Result<Vtk, VtkError> {
     point.push(Attribute::DataArray(
         DataArray::scalars("occupied", 1).with_data(occupied),
     ));
-    let extent = Extent::Ranges([
-        0..=(nx as i32 - 1).max(0),
-        0..=(ny as i32 - 1).max(0),
-        0..=0,
-    ]);
+    let (extent, origin) = placement(snap);
     let h = snap.cell_size as f32;
     Ok(Vtk {
         version: Version::new_xml(1, 0),
@@ -216,7 +242,7 @@ pub fn image_data(snap: &Snapshot) -> Result<Vtk, VtkError> {
         file_path: None,
         data: DataSet::ImageData {
             extent: extent.clone(),
-            origin: [snap.origin[0] as f32, snap.origin[1] as f32, 0.0],
+            origin,
             spacing: [h, h, h],
             meta: None,
             pieces: vec![Piece::Inline(Box::new(ImageDataPiece {
@@ -306,8 +332,12 @@ fn xml_bytes(vtk: Vtk, name: &str) -> Result<Vec<u8>, VtkError> {
 
 /// The files of a series in memory, as (name, bytes): `fields.pvd`, `cracks.pvd` (and
 /// `particles.pvd` when the snapshots carry particles), then per snapshot its `.vti`, `.vtp`
-/// (and `.vtu`). For a server packing them into an archive.
+/// (and `.vtu`); for a 3D run's slices, the per-plane series of [`slice_series_files`]. For a
+/// server packing them into an archive.
 pub fn series_files(snaps: &[Snapshot]) -> Result<Vec<(String, Vec<u8>)>, VtkError> {
+    if snaps.iter().any(|s| s.slice.is_some()) {
+        return slice_series_files(snaps);
+    }
     let mut files = Vec::with_capacity(2 + 2 * snaps.len());
     let mut grids = Vec::new();
     let mut cracks = Vec::new();
@@ -334,6 +364,53 @@ pub fn series_files(snaps: &[Snapshot]) -> Result<Vec<(String, Vec<u8>)>, VtkErr
     Ok(files)
 }
 
+/// The series of a 3D run's slices: per plane `slice_<normal>_<at>mm.pvd` and its
+/// `slice_<normal>_<at>mm_NNNNN.vti` (each image placed at its node plane), and `fields.pvd`
+/// with every plane of every time as one part per plane, so that one file opens all the
+/// planes in place. A slice snapshot has no cracks or particles in this series.
+fn slice_series_files(snaps: &[Snapshot]) -> Result<Vec<(String, Vec<u8>)>, VtkError> {
+    let mut planes: Vec<String> = Vec::new();
+    let mut per_plane: Vec<Vec<(f64, String)>> = Vec::new();
+    let mut all: Vec<(f64, usize, String)> = Vec::new();
+    let mut data = Vec::new();
+    for s in snaps {
+        let plane = match &s.slice {
+            Some(sl) => format!("slice_{}_{:.3}mm", sl.normal, sl.node_at * 1e3),
+            None => "fields".to_string(),
+        };
+        let part = match planes.iter().position(|p| *p == plane) {
+            Some(k) => k,
+            None => {
+                planes.push(plane.clone());
+                per_plane.push(Vec::new());
+                planes.len() - 1
+            }
+        };
+        let name = format!("{plane}_{:05}.vti", per_plane[part].len());
+        data.push((name.clone(), xml_bytes(image_data(s)?, &name)?));
+        per_plane[part].push((s.time, name.clone()));
+        all.push((s.time, part, name));
+    }
+    let mut files = Vec::with_capacity(1 + planes.len() + data.len());
+    let mut fields = String::from(
+        "<?xml version=\"1.0\"?>\n<VTKFile type=\"Collection\" version=\"1.0\" \
+         byte_order=\"LittleEndian\">\n  <Collection>\n",
+    );
+    for (t, part, file) in &all {
+        fields.push_str(&format!(
+            "    <DataSet timestep=\"{t:e}\" group=\"\" part=\"{part}\" file=\"{}\"/>\n",
+            xml_escape(file)
+        ));
+    }
+    fields.push_str("  </Collection>\n</VTKFile>\n");
+    files.push(("fields.pvd".to_string(), fields.into_bytes()));
+    for (plane, entries) in planes.iter().zip(&per_plane) {
+        files.push((format!("{plane}.pvd"), pvd(entries).into_bytes()));
+    }
+    files.extend(data);
+    Ok(files)
+}
+
 /// Write a series into `dir` (created if missing): `fields.pvd`, `cracks.pvd` and the
 /// per-snapshot files. Files of an earlier export with more snapshots are not removed.
 pub fn write_series(dir: &Path, snaps: &[Snapshot]) -> Result<VtkSeries, VtkError> {
@@ -343,7 +420,11 @@ pub fn write_series(dir: &Path, snaps: &[Snapshot]) -> Result<VtkSeries, VtkErro
     })?;
     let mut written = Vec::new();
     let mut particles_pvd = None;
+    let mut cracks_pvd = None;
     for (name, bytes) in series_files(snaps)? {
+        if name == "cracks.pvd" {
+            cracks_pvd = Some(dir.join(&name));
+        }
         if name == "particles.pvd" {
             particles_pvd = Some(dir.join(&name));
         }
@@ -356,7 +437,7 @@ pub fn write_series(dir: &Path, snaps: &[Snapshot]) -> Result<VtkSeries, VtkErro
     }
     Ok(VtkSeries {
         fields_pvd: dir.join("fields.pvd"),
-        cracks_pvd: dir.join("cracks.pvd"),
+        cracks_pvd,
         particles_pvd,
         files: written,
     })
@@ -407,5 +488,73 @@ mod tests {
                 ..
             })
         ));
+    }
+
+    /// A 3D run's slices: one series per plane and `fields.pvd` with a part per plane; each
+    /// image lies at its node plane (a plane normal to x spans y and z at x = node_at), with
+    /// velocity a 3-vector.
+    #[test]
+    fn slice_series_place_each_plane_in_space() {
+        let slice = |t: f64, normal: &str, node_at: f64, axes: [&str; 2]| Snapshot {
+            index: 0,
+            time: t,
+            nx: 4,
+            ny: 3,
+            origin: [0.01, 0.02],
+            cell_size: 0.001,
+            fields: vec![],
+            components: ["vx", "vy", "vz"]
+                .iter()
+                .enumerate()
+                .map(|(k, n)| fracture_api::results::FieldComponent {
+                    name: (*n).into(),
+                    values: vec![k as f32 + 1.0; 12],
+                })
+                .collect(),
+            cracks: vec![],
+            particles: None,
+            slice: Some(fracture_api::results::SnapshotSlice {
+                normal: normal.into(),
+                at: node_at,
+                node_at,
+                axes: axes.map(String::from),
+            }),
+        };
+        let snaps = [
+            slice(0.0, "z", 0.002, ["x", "y"]),
+            slice(0.0, "x", 0.005, ["y", "z"]),
+            slice(1e-6, "z", 0.002, ["x", "y"]),
+            slice(1e-6, "x", 0.005, ["y", "z"]),
+        ];
+        let files = series_files(&snaps).expect("series");
+        let names: Vec<&str> = files.iter().map(|f| f.0.as_str()).collect();
+        assert_eq!(
+            names[..3],
+            ["fields.pvd", "slice_z_2.000mm.pvd", "slice_x_5.000mm.pvd"]
+        );
+        assert!(names.contains(&"slice_x_5.000mm_00001.vti"));
+        assert!(!names.contains(&"cracks.pvd"));
+        let text = |n: &str| {
+            String::from_utf8(files.iter().find(|f| f.0 == n).expect(n).1.clone()).expect("utf8")
+        };
+        let fields = text("fields.pvd");
+        assert!(
+            fields.contains("part=\"1\" file=\"slice_x_5.000mm_00000.vti\""),
+            "{fields}"
+        );
+        assert!(
+            fields.contains("timestep=\"1e-6\" group=\"\" part=\"0\""),
+            "{fields}"
+        );
+        let x = text("slice_x_5.000mm_00000.vti");
+        assert!(x.contains("WholeExtent=\"0 0 0 3 0 2\""), "{x}");
+        assert!(x.contains("Origin=\"0.005 0.01 0.02\""), "{x}");
+        let z = text("slice_z_2.000mm_00001.vti");
+        assert!(z.contains("WholeExtent=\"0 3 0 2 0 0\""), "{z}");
+        assert!(z.contains("Origin=\"0.01 0.02 0.002\""), "{z}");
+        assert!(
+            z.contains("Name=\"velocity\" NumberOfComponents=\"3\""),
+            "{z}"
+        );
     }
 }

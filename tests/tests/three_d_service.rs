@@ -141,6 +141,36 @@ fn every_3d_example_runs_through_the_service() {
         assert!(file.snapshots.iter().all(|sn| sn.slice.is_some()), "{name}");
         let scene = file.scene.expect("scene metadata");
         assert!(scene["json"].contains(r#""analysis":"3d""#), "{name}");
+        // The VTK archive: one series per plane, each image at its plane, and `fields.pvd`
+        // with every plane as a part.
+        let zip = s
+            .http
+            .get(s.at(&format!("/api/v1/jobs/{id}/vtk.zip")))
+            .send()
+            .expect("vtk.zip")
+            .bytes()
+            .expect("zip bytes");
+        let mut zip = zip::ZipArchive::new(std::io::Cursor::new(zip.to_vec())).expect("a zip");
+        let mut entries = std::collections::BTreeMap::new();
+        for k in 0..zip.len() {
+            let mut f = zip.by_index(k).expect("entry");
+            let mut data = String::new();
+            std::io::Read::read_to_string(&mut f, &mut data).expect("text entry");
+            let entry = f.name().expect("entry name").to_string();
+            entries.insert(entry.rsplit('/').next().unwrap_or("").to_string(), data);
+        }
+        let series = entries.keys().filter(|k| k.starts_with("slice_") && k.ends_with(".pvd"));
+        assert_eq!(series.count(), slices.len(), "{name}: {:?}", entries.keys());
+        assert_eq!(
+            entries.keys().filter(|k| k.ends_with(".vti")).count(),
+            snaps.len(),
+            "{name}"
+        );
+        let fields = &entries["fields.pvd"];
+        for part in 0..slices.len() {
+            assert!(fields.contains(&format!("part=\"{part}\"")), "{name}: {fields}");
+        }
+        assert!(!entries.contains_key("cracks.pvd"), "{name}");
     }
     // The stream carried the run as for 2D: progress, energy, snapshots with their planes,
     // the final status with the 3D summary.

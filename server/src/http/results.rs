@@ -472,8 +472,9 @@ pub(super) async fn fields_mcap(
 /// The job's field snapshots as a VTK series for ParaView, zipped: a folder
 /// `<id>-vtk/` with `fields.pvd` (open this one), `cracks.pvd`, and per snapshot a
 /// `fields_NNNNN.vti` (the nodal grid) and `cracks_NNNNN.vtp` (the crack lines), as
-/// `fracture_results::vtk::series_files` writes them (`docs/vtk.md`). While the job runs:
-/// the snapshots so far.
+/// `fracture_results::vtk::series_files` writes them (`docs/vtk.md`); a 3D job's slices as
+/// one series per plane, each image at its plane, and `fields.pvd` with a part per plane.
+/// While the job runs: the snapshots so far.
 #[utoipa::path(get, path = "/api/v1/jobs/{id}/vtk.zip", tag = "results",
     params(("id" = String, Path, description = "Job id")),
     responses((status = 200, description = "Zip archive (`Content-Disposition: attachment; filename=\"<id>-vtk.zip\"`)",
