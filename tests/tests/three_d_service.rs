@@ -159,7 +159,9 @@ fn every_3d_example_runs_through_the_service() {
             let entry = f.name().expect("entry name").to_string();
             entries.insert(entry.rsplit('/').next().unwrap_or("").to_string(), data);
         }
-        let series = entries.keys().filter(|k| k.starts_with("slice_") && k.ends_with(".pvd"));
+        let series = entries
+            .keys()
+            .filter(|k| k.starts_with("slice_") && k.ends_with(".pvd"));
         assert_eq!(series.count(), slices.len(), "{name}: {:?}", entries.keys());
         assert_eq!(
             entries.keys().filter(|k| k.ends_with(".vti")).count(),
@@ -168,7 +170,10 @@ fn every_3d_example_runs_through_the_service() {
         );
         let fields = &entries["fields.pvd"];
         for part in 0..slices.len() {
-            assert!(fields.contains(&format!("part=\"{part}\"")), "{name}: {fields}");
+            assert!(
+                fields.contains(&format!("part=\"{part}\"")),
+                "{name}: {fields}"
+            );
         }
         assert!(!entries.contains_key("cracks.pvd"), "{name}");
     }
