@@ -332,8 +332,8 @@ fn xml_bytes(vtk: Vtk, name: &str) -> Result<Vec<u8>, VtkError> {
 
 /// The files of a series in memory, as (name, bytes): `fields.pvd`, `cracks.pvd` (and
 /// `particles.pvd` when the snapshots carry particles), then per snapshot its `.vti`, `.vtp`
-/// (and `.vtu`); for a 3D run's slices, the per-plane series of [`slice_series_files`]. For a
-/// server packing them into an archive.
+/// (and `.vtu`); for a 3D run's slices, one series per plane and `fields.pvd` with a part per
+/// plane (each image at its node plane). For a server packing them into an archive.
 pub fn series_files(snaps: &[Snapshot]) -> Result<Vec<(String, Vec<u8>)>, VtkError> {
     if snaps.iter().any(|s| s.slice.is_some()) {
         return slice_series_files(snaps);
