@@ -87,21 +87,10 @@ fn fast_path_matches_generic_path_without_a_crack() {
 /// near the crack take the generic path anyway, the others the fast path normally.
 #[test]
 fn fast_path_matches_generic_path_with_a_growing_crack() {
-    let h = 0.001;
-    let m = 2.0 * h;
-    let s = scene(json!({
-        "grid": {"cell_size": h, "min": [0.0, 0.0], "max": [0.044, 0.044]},
-        "materials": {"m": homalite()},
-        "bodies": [{"material": "m", "region": {"rectangle": {"min": [m, m], "max": [0.042, 0.042]}}}],
-        "cracks": [{"points": [[m - 0.5 * h, 0.0225], [0.015, 0.0225]],
-                    "j_integral": {"method": "domain", "radius": 6.0 * h},
-                    "propagation": {"criterion": "energy_release", "toughness": 5.0}}],
-        "loads": [
-            {"region": {"rectangle": {"min": [0.0, 0.0415], "max": [1.0, 1.0]}}, "traction": [0.0, 2.0e6], "ramp_time": 5.0e-6},
-            {"region": {"rectangle": {"min": [0.0, 0.0], "max": [1.0, 0.0025]}}, "traction": [0.0, -2.0e6], "ramp_time": 5.0e-6}
-        ],
-        "time": {"end": 3.0e-5}
-    }));
+    // The edge-cracked plate of tests/common, for 30 µs.
+    let mut v = edge_cracked_plate_json();
+    v["time"]["end"] = json!(3.0e-5);
+    let s = scene(v);
     let rows = assert_paths_agree(&s, false);
     assert!(
         rows.iter().any(|r| r.split(',').nth(11) == Some("1")),
