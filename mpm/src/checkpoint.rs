@@ -1,23 +1,37 @@
-//! Checkpoints of the core: the [`State`] as bytes and back. A checkpoint is
-//! the state — particles, sort order and strip bounds, time, steps, energy ledger — and
-//! nothing else: the model is rebuilt from the scene, scratch by the next step.
+//! Checkpoints: the [`State`] as bytes and back, for both dimensions and any layer. A
+//! checkpoint is the state — particles, the layer's state (the cracks), sort order and strip
+//! bounds, time, steps, energy ledger, counters — and nothing else: the model is rebuilt from
+//! the scene, scratch by the next step. A P2G done ahead by a fused step is simply done again
+//! by the restored simulation's first step (bitwise the same: `tests/fused.rs`).
 //!
-//! Format: postcard (f64 as its exact bits) of a header (magic, format, solver version, the
-//! dimension, the scene's hash, particle count, steps, the SHA-256 of the state), then the
-//! state. A checkpoint of another scene, version, dimension or whose bytes do not match
-//! their digest is refused, never used.
+//! Format: postcard (f64 as its exact bits) of a header — the dimension's magic, the format,
+//! the solver version, the scene's hash, the particle count, the step count and the SHA-256
+//! of the state — then the state in its field order. A 2D checkpoint is byte for byte what the
+//! 2D solver wrote before its step moved onto this core (format 3). A checkpoint of another
+//! scene, version, format or dimension, or whose bytes do not match their digest, is refused,
+//! never used.
 
 use serde::{Deserialize, Serialize};
 use sha2::{Digest, Sha256};
 
 use crate::dim::Dim;
+use crate::layer::Layer;
 use crate::state::State;
 use crate::step::Simulation;
 
-/// First bytes of every core checkpoint.
-pub const MAGIC: [u8; 8] = *b"MPMCORE\0";
-/// Layout version of the state.
-pub const FORMAT: u32 = 2;
+/// First bytes of a 2D checkpoint.
+pub const MAGIC_2D: [u8; 8] = *b"MPMFSIM\0";
+/// First bytes of a 3D checkpoint.
+pub const MAGIC_3D: [u8; 8] = *b"MPMFS3D\0";
+/// First bytes of the 3D checkpoints of format 2 (refused with their format named).
+const MAGIC_3D_FORMAT_2: [u8; 8] = *b"MPMCORE\0";
+/// Version of the checkpoint layout; bumped whenever the persisted state changes shape.
+pub const FORMAT: u32 = 3;
+
+/// The magic of a dimension's checkpoints.
+pub fn magic(dims: usize) -> [u8; 8] {
+    if dims == 3 { MAGIC_3D } else { MAGIC_2D }
+}
 
 /// Why a checkpoint was refused.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -25,9 +39,21 @@ pub enum CheckpointError {
     /// Not a checkpoint, truncated, or its bytes do not match their digest.
     #[error("not a usable checkpoint: {0}")]
     Corrupt(String),
-    /// Written by another version, format or dimension.
-    #[error("checkpoint of {0}; this is {1}")]
-    Version(String, String),
+    /// Written by another solver version or checkpoint format.
+    #[error(
+        "checkpoint of solver {found_version} (format {found_format}); this is solver {version} \
+         (format {format})"
+    )]
+    Version {
+        /// The solver version that wrote it.
+        found_version: String,
+        /// Its format.
+        found_format: u32,
+        /// This solver's version.
+        version: String,
+        /// This solver's format.
+        format: u32,
+    },
     /// Written for another scene.
     #[error("checkpoint of another scene (scene hash {found}, this scene's is {expected})")]
     Scene {
@@ -36,38 +62,84 @@ pub enum CheckpointError {
         /// This scene's hash.
         expected: String,
     },
-    /// The state does not fit the scene.
+    /// The state does not fit the scene (dimension, particle count, grid, cracks).
     #[error("checkpoint state does not fit the scene: {0}")]
     Mismatch(String),
+    /// The scene could not be built.
+    #[error("cannot build the scene: {0}")]
+    Build(String),
 }
 
-#[derive(Serialize, Deserialize)]
+/// What precedes the state.
+#[derive(Debug, Clone, Serialize, Deserialize)]
 struct Header {
     magic: [u8; 8],
     format: u32,
-    version: String,
-    dims: u32,
+    solver_version: String,
     scene_hash: String,
     particles: u64,
     steps: u64,
     digest: [u8; 32],
 }
 
-fn identity(format: u32, version: &str, dims: u32) -> String {
-    format!("solver {version}, format {format}, {dims}D")
+/// The first fields of every header this solver ever wrote.
+#[derive(Deserialize)]
+struct Prefix {
+    magic: [u8; 8],
+    format: u32,
+    solver_version: String,
 }
 
-impl<D: Dim> Simulation<D> {
-    /// The state as bytes. Taking one does not change the simulation.
+/// The header of `bytes`, checked for the magic of dimension `dims`, this format and this
+/// solver version; and the state's bytes after it.
+fn header(bytes: &[u8], dims: usize) -> Result<(Header, &[u8]), CheckpointError> {
+    let (p, _) = postcard::take_from_bytes::<Prefix>(bytes)
+        .map_err(|e| CheckpointError::Corrupt(format!("header: {e}")))?;
+    let found_dims = match p.magic {
+        MAGIC_2D => 2,
+        MAGIC_3D | MAGIC_3D_FORMAT_2 => 3,
+        _ => return Err(CheckpointError::Corrupt("no checkpoint magic".into())),
+    };
+    let version = fracture_api::SOLVER_VERSION;
+    if p.format != FORMAT || p.magic == MAGIC_3D_FORMAT_2 || p.solver_version != version {
+        return Err(CheckpointError::Version {
+            found_version: p.solver_version,
+            found_format: p.format,
+            version: version.to_string(),
+            format: FORMAT,
+        });
+    }
+    if dims != found_dims {
+        return Err(CheckpointError::Mismatch(format!(
+            "a {found_dims}D checkpoint; this scene is {dims}D"
+        )));
+    }
+    postcard::take_from_bytes::<Header>(bytes)
+        .map_err(|e| CheckpointError::Corrupt(format!("header: {e}")))
+}
+
+/// The step count a checkpoint of this format was taken at, read from its header (its
+/// magic checked; the version, scene and state are checked by [`Simulation::restore`]).
+pub fn checkpoint_steps(bytes: &[u8]) -> Result<u64, CheckpointError> {
+    let (h, _) = postcard::take_from_bytes::<Header>(bytes)
+        .map_err(|e| CheckpointError::Corrupt(e.to_string()))?;
+    if h.magic != MAGIC_2D && h.magic != MAGIC_3D {
+        return Err(CheckpointError::Corrupt("no checkpoint magic".into()));
+    }
+    Ok(h.steps)
+}
+
+impl<D: Dim, L: Layer<D>> Simulation<D, L> {
+    /// The state as bytes (module docs: what is in it and the format). Taking one does not
+    /// change the simulation.
     pub fn checkpoint(&self) -> Vec<u8> {
-        // Serializing plain data into a Vec cannot fail; an empty body would be refused on
-        // restore rather than used.
+        // Serializing plain data into a Vec cannot fail (no maps with non-string keys, no
+        // IO); an empty body would be refused on restore rather than used.
         let body = postcard::to_allocvec(&self.state).unwrap_or_default();
         let header = Header {
-            magic: MAGIC,
+            magic: magic(D::N),
             format: FORMAT,
-            version: fracture_api::SOLVER_VERSION.to_string(),
-            dims: D::N as u32,
+            solver_version: fracture_api::SOLVER_VERSION.to_string(),
             scene_hash: self.model.scene_hash.clone(),
             particles: self.state.parts.len() as u64,
             steps: self.state.steps,
@@ -79,20 +151,10 @@ impl<D: Dim> Simulation<D> {
     }
 
     /// Put the state of a checkpoint taken by [`Simulation::checkpoint`] of the same scene
-    /// into this freshly built simulation; it then steps on bitwise identically.
+    /// into this freshly built simulation; it then steps on bitwise identically, with any
+    /// thread count.
     pub fn restore(&mut self, bytes: &[u8]) -> Result<(), CheckpointError> {
-        let (h, body) = postcard::take_from_bytes::<Header>(bytes)
-            .map_err(|e| CheckpointError::Corrupt(format!("header: {e}")))?;
-        if h.magic != MAGIC {
-            return Err(CheckpointError::Corrupt("no checkpoint magic".into()));
-        }
-        let version = fracture_api::SOLVER_VERSION;
-        if h.format != FORMAT || h.version != version || h.dims != D::N as u32 {
-            return Err(CheckpointError::Version(
-                identity(h.format, &h.version, h.dims),
-                identity(FORMAT, version, D::N as u32),
-            ));
-        }
+        let (h, body) = header(bytes, D::N)?;
         if h.scene_hash != self.model.scene_hash {
             return Err(CheckpointError::Scene {
                 found: h.scene_hash,
@@ -105,9 +167,10 @@ impl<D: Dim> Simulation<D> {
                 "the state does not match its digest".into(),
             ));
         }
-        let mut st: State<D> = postcard::from_bytes(body)
+        let st: State<D, L> = postcard::from_bytes(body)
             .map_err(|e| CheckpointError::Corrupt(format!("state: {e}")))?;
-        let n = self.state.parts.len();
+        let fresh = &self.state.parts;
+        let n = fresh.len();
         let p = &st.parts;
         if h.particles != n as u64
             || p.len() != n
@@ -115,9 +178,11 @@ impl<D: Dim> Simulation<D> {
             || p.stress.len() != n
             || p.cold.len() != n
             || p.wden.len() != n
+            || p.grad_u.len() != fresh.grad_u.len()
+            || p.fmask.len() != fresh.fmask.len()
         {
             return Err(CheckpointError::Mismatch(format!(
-                "{} particles, the scene has {n}",
+                "particle arrays of {} particles, the scene has {n}",
                 p.len()
             )));
         }
@@ -132,8 +197,30 @@ impl<D: Dim> Simulation<D> {
         if st.steps != h.steps {
             return Err(CheckpointError::Corrupt("step counts disagree".into()));
         }
-        st.parts.wts = std::mem::take(&mut self.state.parts.wts);
-        self.state = st;
+        let State {
+            mut parts,
+            layer,
+            needs_sort,
+            strip_bounds,
+            time,
+            steps,
+            ledger,
+            counters,
+        } = st;
+        self.state
+            .layer
+            .adopt(layer)
+            .map_err(CheckpointError::Mismatch)?;
+        // The particles, with the step's scratch sized as a fresh build sizes it.
+        parts.wts = std::mem::take(&mut self.state.parts.wts);
+        let s = &mut self.state;
+        s.parts = parts;
+        s.needs_sort = needs_sort;
+        s.strip_bounds = strip_bounds;
+        s.time = time;
+        s.steps = steps;
+        s.ledger = ledger;
+        s.counters = counters;
         // The next step does its own P2G (a fresh simulation has none done ahead anyway).
         self.scratch.prefetched = None;
         Ok(())

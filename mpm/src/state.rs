@@ -10,6 +10,7 @@ use serde::{Deserialize, Serialize};
 
 use crate::dim::{Dim, Elastic};
 use crate::grid::{GridGeom, Node};
+use crate::layer::NoLayer;
 use crate::math::Kernel;
 use crate::particles::{Cold, Kin, Mech, Particles};
 
@@ -31,18 +32,44 @@ pub struct Ledger {
 }
 
 impl Ledger {
-    /// Energy balance error: kinetic + strain + dissipated − initial − external work.
+    /// Energy balance error: kinetic + strain + dissipated − external work − initial (summed
+    /// in this order: the energy rows of both dimensions report it).
     pub fn balance(&self) -> f64 {
-        self.kinetic + self.strain + self.dissipated - self.initial_total - self.external_work
+        self.kinetic + self.strain + self.dissipated - self.external_work - self.initial_total
     }
 }
 
-/// The state that persists across steps (and is the checkpoint).
+/// How often the optional phases of a step ran: cheap counters (incremented once per phase
+/// call, outside the particle and node loops) that show what a scene skips.
+#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, Serialize, Deserialize)]
+pub struct WorkCounters {
+    /// Steps taken (filled in when read; the stored value stays 0).
+    pub steps: u64,
+    /// Crack velocity-field assignments (one per step with cracks, §3).
+    pub crack_field_passes: u64,
+    /// Crack-face contact passes (three per step with cracks, §4).
+    pub contact_passes: u64,
+    /// Crack-surface moves (one per step with cracks, §5).
+    pub surface_moves: u64,
+    /// Propagation checks (one per step with cracks, §7).
+    pub propagation_checks: u64,
+    /// J-integral evaluations (per tip, on a history sample or a growth check, §6; filled in
+    /// when read by the layer that counts them; the stored value stays 0).
+    pub j_evaluations: u64,
+}
+
+/// The state that persists across steps (and is the checkpoint: serialized in this field
+/// order).
 #[derive(Debug, Clone, Serialize, Deserialize)]
-#[serde(bound = "")]
-pub struct State<D: Dim> {
+#[serde(bound(
+    serialize = "L: Serialize",
+    deserialize = "L: serde::de::DeserializeOwned"
+))]
+pub struct State<D: Dim, L = NoLayer> {
     /// Particles (in the order of the last sort).
     pub parts: Particles<D>,
+    /// The crack layer's state ([`NoLayer`]: nothing).
+    pub layer: L,
     /// A particle left its strip: sort before the next scatter.
     pub needs_sort: bool,
     /// First particle of each strip (of the last sort).
@@ -53,6 +80,8 @@ pub struct State<D: Dim> {
     pub steps: u64,
     /// Energies.
     pub ledger: Ledger,
+    /// How often the optional phases ran.
+    pub counters: WorkCounters,
 }
 
 /// Whether a point lies in a region.
@@ -198,6 +227,9 @@ pub struct Model<D: Dim> {
     pub energy_scale: f64,
     /// Arithmetic of the particle passes.
     pub kernel: Kernel,
+    /// Every particle through the generic stencil path, even where the fast field-0 path
+    /// applies (bitwise the same; a switch for the test that proves it).
+    pub generic_stencil: bool,
     /// Threads.
     pub threads: usize,
     /// The thread pool.
@@ -234,6 +266,12 @@ impl PassTimes {
 pub struct Scratch<D: Dim> {
     /// Grid nodes (storage layout of `GridGeom`).
     pub nodes: Vec<Node<D>>,
+    /// Field-1 nodes of the step (a layer's second velocity field), in storage order.
+    pub f1: Vec<Node<D>>,
+    /// Storage index of each field-1 node.
+    pub f1_index: Vec<u32>,
+    /// Storage index → field-1 slot (`u32::MAX`: none); empty without a multi-field layer.
+    pub slot_of: Vec<u32>,
     /// Active box of the last P2G per direction, inclusive (lo, hi).
     pub active: Option<(D::U, D::U)>,
     /// Active nodes (mass above `m_tiny`) of the last P2G.

@@ -14,11 +14,12 @@ use crate::backend::{Backend, Cpu};
 use crate::dim::Dim;
 use crate::grid::{GridGeom, Node};
 use crate::gridops::{self, Stage};
+use crate::layer::{Hook, Layer, NoLayer};
 use crate::math::Kernel;
 use crate::particles::Particles;
 use crate::passes::{Acc, FAIL_GRID, FAIL_POSITION, FAIL_VELOCITY, Grid, PassCx};
 use crate::sort::{SortScratch, sort_by_cell};
-use crate::state::{BcNodes, Ledger, Model, PassTimes, Scratch, Spec, State};
+use crate::state::{BcNodes, Ledger, Model, PassTimes, Scratch, Spec, State, WorkCounters};
 
 /// Why a simulation could not be built.
 #[derive(Debug, thiserror::Error)]
@@ -77,19 +78,39 @@ pub enum StepError {
         /// Number of spatial dimensions.
         dims: usize,
     },
+    /// A grid node needs more velocity fields than supported.
+    #[error(
+        "step {step}: node at {} m needs {fields} velocity fields; at most {max} are supported (two cracks within a cell of each other?)",
+        fmt_pos(.position, *.dims)
+    )]
+    TooManyFields {
+        /// Step number.
+        step: u64,
+        /// Node position (unused components 0).
+        position: [f64; 3],
+        /// Number of spatial dimensions.
+        dims: usize,
+        /// Fields needed.
+        fields: u32,
+        /// Fields supported.
+        max: u32,
+    },
 }
 
 /// What happened in one step.
 #[derive(Debug, Clone, Copy, Default, PartialEq)]
 pub struct StepStats {
-    /// Active grid nodes in this step.
+    /// The layer grew something (a crack tip advanced) in this step.
+    pub grew: bool,
+    /// Active grid nodes (field-1 nodes included) in this step.
     pub active_nodes: usize,
 }
 
-/// A running simulation of dimension `D`.
-pub struct Simulation<D: Dim> {
+/// A running simulation of dimension `D` with the layer `L` on its step ([`NoLayer`]: the
+/// plain continuum).
+pub struct Simulation<D: Dim, L: Layer<D> = NoLayer> {
     /// What persists (the checkpoint).
-    pub state: State<D>,
+    pub state: State<D, L>,
     /// What the scene gives.
     pub model: Model<D>,
     /// The step's working memory.
@@ -97,7 +118,7 @@ pub struct Simulation<D: Dim> {
     backend: Box<dyn Backend<D>>,
 }
 
-impl<D: Dim> Simulation<D> {
+impl<D: Dim> Simulation<D, NoLayer> {
     /// Build a simulation (CPU backend, portable arithmetic).
     pub fn new(spec: Spec<D>) -> Result<Simulation<D>, BuildError> {
         Self::with_backend(spec, Box::new(Cpu))
@@ -108,6 +129,17 @@ impl<D: Dim> Simulation<D> {
         spec: Spec<D>,
         backend: Box<dyn Backend<D>>,
     ) -> Result<Simulation<D>, BuildError> {
+        Simulation::with_layer(spec, NoLayer, backend)
+    }
+}
+
+impl<D: Dim, L: Layer<D>> Simulation<D, L> {
+    /// Build a simulation with a layer on its step, on the given backend.
+    pub fn with_layer(
+        spec: Spec<D>,
+        layer: L,
+        backend: Box<dyn Backend<D>>,
+    ) -> Result<Simulation<D, L>, BuildError> {
         if spec.particles.is_empty() {
             return Err(BuildError::Spec("no particles".into()));
         }
@@ -143,12 +175,21 @@ impl<D: Dim> Simulation<D> {
             m_tiny: f64::MIN_POSITIVE,
             energy_scale: 1e-12 * mass_total * c_max * c_max,
             kernel: Kernel::Portable,
+            generic_stencil: false,
             threads,
             pool: std::sync::Arc::new(pool),
             scene_hash: spec.scene_hash,
         };
+        let multi = layer.multi_field();
         let scratch = Scratch {
             nodes: vec![Node::default(); geom.storage_len()],
+            f1: Vec::new(),
+            f1_index: Vec::new(),
+            slot_of: if multi {
+                vec![u32::MAX; geom.storage_len()]
+            } else {
+                Vec::new()
+            },
             active: None,
             active_nodes: 0,
             load_now: vec![D::V::default(); spec.loads.len()],
@@ -160,13 +201,21 @@ impl<D: Dim> Simulation<D> {
             prefetched: None,
             fuse: true,
         };
+        let mut parts = spec.particles;
+        if multi {
+            let n = parts.len();
+            parts.fmask = vec![Default::default(); n];
+            parts.grad_u = vec![Default::default(); n];
+        }
         let mut state = State {
-            parts: spec.particles,
+            parts,
+            layer,
             needs_sort: true,
             strip_bounds: vec![0; geom.strips + 1],
             time: 0.0,
             steps: 0,
             ledger: Ledger::default(),
+            counters: WorkCounters::default(),
         };
         state.ledger.kinetic = kinetic_energy(&state.parts);
         state.ledger.initial_total = state.ledger.kinetic;
@@ -285,43 +334,38 @@ impl<D: Dim> Simulation<D> {
         let t1 = t0 + dt;
         if prefetched.is_none() {
             self.reset_grid();
+            let (layer, cx) = self.hook();
+            layer.fields(cx)?;
+            self.index_f1();
         }
         self.ramp_loads(t0);
         lap(|t| &mut t.grid, &mut self.scratch);
 
-        let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
+        // Pass 1: P2G; conditions and the layer on the momenta.
         let acc = match prefetched {
             Some(acc) => acc,
-            None => {
-                let cx = pass_cx(m, &st.strip_bounds, &sc.load_now);
-                self.backend
-                    .p2g(&cx, &mut st.parts, &mut Grid::single(&mut sc.nodes))
-            }
+            None => self.pass(|b, cx, p, g| b.p2g(cx, p, g)),
         };
         lap(|t| &mut t.p2g, &mut self.scratch);
         self.check(&acc)?;
         self.set_active(&acc);
         self.apply_bc_momentum(t0, false);
+        self.layer_stage(Stage::Extrapolated);
         self.nodal(Stage::Extrapolated);
         lap(|t| &mut t.grid, &mut self.scratch);
 
-        let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
-        let cx = pass_cx(m, &st.strip_bounds, &sc.load_now);
-        let acc = self
-            .backend
-            .forces(&cx, &mut st.parts, &mut Grid::single(&mut sc.nodes));
+        // Pass 2: first stress half-update and forces; damping, condition force fix, layer.
+        let acc = self.pass(|b, cx, p, g| b.forces(cx, p, g));
         lap(|t| &mut t.forces, &mut self.scratch);
         self.check(&acc)?;
         self.damp_forces();
         self.bc_force_fix(t1);
+        self.layer_stage(Stage::Forces);
         self.nodal(Stage::Forces);
         lap(|t| &mut t.grid, &mut self.scratch);
 
-        let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
-        let cx = pass_cx(m, &st.strip_bounds, &sc.load_now);
-        let acc = self
-            .backend
-            .update(&cx, &mut st.parts, &mut Grid::single(&mut sc.nodes));
+        // Pass 3: particle update and re-extrapolation; conditions and layer on the new momenta.
+        let acc = self.pass(|b, cx, p, g| b.update(cx, p, g));
         lap(|t| &mut t.update, &mut self.scratch);
         self.check(&acc)?;
         let l = &mut self.state.ledger;
@@ -330,33 +374,39 @@ impl<D: Dim> Simulation<D> {
         l.work_abs += acc.w.abs();
         self.state.needs_sort |= acc.resort;
         self.apply_bc_momentum(t1, true);
+        self.layer_stage(Stage::Reextrapolated);
         self.nodal(Stage::Reextrapolated);
+        let (layer, cx) = self.hook();
+        layer.surfaces(cx);
         lap(|t| &mut t.grid, &mut self.scratch);
 
-        let acc = if self.scratch.fuse && !self.state.needs_sort {
+        // Pass 4: second stress half-update, fused with the next P2G where nothing can fall
+        // between (no re-sort due; no multi-field layer, whose next fields depend on the
+        // committed positions and the surfaces' motion).
+        let fuse = self.scratch.fuse && !self.state.needs_sort && !self.state.layer.multi_field();
+        let acc = if fuse {
             self.zero_alt();
             let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
-            let cx = pass_cx(m, &st.strip_bounds, &sc.load_now);
-            let (acc, next) = self.backend.strain_p2g(
-                &cx,
-                &mut st.parts,
-                &mut Grid::single(&mut sc.nodes),
-                &mut sc.nodes_alt,
-            );
+            let cx = pass_cx(m, &st.strip_bounds, &sc.load_now, &sc.slot_of, false);
+            let grid = &mut Grid::single(&mut sc.nodes);
+            let (acc, next) = self
+                .backend
+                .strain_p2g(&cx, &mut st.parts, grid, &mut sc.nodes_alt);
             self.scratch.alt_box = self.box_of(&next);
             self.scratch.prefetched = Some(next);
             acc
         } else {
-            let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
-            let cx = pass_cx(m, &st.strip_bounds, &sc.load_now);
-            self.backend
-                .strain(&cx, &mut st.parts, &mut Grid::single(&mut sc.nodes))
+            self.pass(|b, cx, p, g| b.strain(cx, p, g))
         };
         lap(|t| &mut t.strain, &mut self.scratch);
         self.check(&acc)?;
         self.state.ledger.strain = acc.e;
         self.state.time = t1;
         self.state.steps += 1;
+
+        // The layer after the step (growth).
+        let (layer, cx) = self.hook();
+        let grew = layer.after_step(cx)?;
 
         // Energy blow-up: kinetic + strain far above everything ever put in.
         let l = self.state.ledger;
@@ -370,8 +420,61 @@ impl<D: Dim> Simulation<D> {
             });
         }
         Ok(StepStats {
+            grew,
             active_nodes: self.scratch.active_nodes,
         })
+    }
+
+    /// One particle pass on the backend, over both fields of the grid.
+    fn pass(
+        &mut self,
+        run: impl FnOnce(
+            &mut dyn Backend<D>,
+            &PassCx<'_, D>,
+            &mut Particles<D>,
+            &mut Grid<'_, D>,
+        ) -> Acc,
+    ) -> Acc {
+        let (m, st, sc) = (&self.model, &mut self.state, &mut self.scratch);
+        let multi = st.layer.multi_field();
+        let cx = pass_cx(m, &st.strip_bounds, &sc.load_now, &sc.slot_of, multi);
+        let mut grid = Grid {
+            nodes: &mut sc.nodes,
+            f1: &mut sc.f1,
+            f1_index: &sc.f1_index,
+        };
+        run(self.backend.as_mut(), &cx, &mut st.parts, &mut grid)
+    }
+
+    /// The layer and what its hooks see (split borrows of the simulation).
+    fn hook(&mut self) -> (&mut L, Hook<'_, D>) {
+        let st = &mut self.state;
+        let cx = Hook {
+            model: &self.model,
+            parts: &mut st.parts,
+            strip_bounds: &st.strip_bounds,
+            ledger: &mut st.ledger,
+            counters: &mut st.counters,
+            scratch: &mut self.scratch,
+            time: st.time,
+            steps: st.steps,
+        };
+        (&mut st.layer, cx)
+    }
+
+    /// The layer at a momentum stage.
+    fn layer_stage(&mut self, stage: Stage) {
+        let (layer, cx) = self.hook();
+        layer.stage(stage, cx);
+    }
+
+    /// The slot map of the field-1 table the layer just built.
+    fn index_f1(&mut self) {
+        let sc = &mut self.scratch;
+        sc.f1.resize(sc.f1_index.len(), Node::default());
+        for (slot, &i) in sc.f1_index.iter().enumerate() {
+            sc.slot_of[i as usize] = slot as u32;
+        }
     }
 
     fn position3(&self, i: usize) -> [f64; 3] {
@@ -476,11 +579,16 @@ impl<D: Dim> Simulation<D> {
     }
 }
 
-impl<D: Dim> Simulation<D> {
-    /// Zero the grid where the last step wrote.
+impl<D: Dim, L: Layer<D>> Simulation<D, L> {
+    /// Zero the grid where the last step wrote, and the field-1 table.
     fn reset_grid(&mut self) {
         let sc = &mut self.scratch;
         gridops::reset(&self.model.geom, &mut sc.nodes, sc.active);
+        for &i in &sc.f1_index {
+            sc.slot_of[i as usize] = u32::MAX;
+        }
+        sc.f1.clear();
+        sc.f1_index.clear();
     }
 
     /// The active box of a P2G's reduction (clamped) and the number of nodes with mass.
@@ -499,7 +607,7 @@ impl<D: Dim> Simulation<D> {
         }
         self.scratch.active = Some((lo, hi));
         let sc = &mut self.scratch;
-        sc.active_nodes = gridops::count(&g, &sc.nodes, (lo, hi), self.model.m_tiny);
+        sc.active_nodes = gridops::count(&g, &sc.nodes, (lo, hi), self.model.m_tiny) + sc.f1.len();
     }
 
     /// Nodal velocity (p/m, then q/m) or acceleration (f/m) at `stage`.
@@ -507,7 +615,7 @@ impl<D: Dim> Simulation<D> {
         let sc = &mut self.scratch;
         let geom = &self.model.geom;
         let m_tiny = self.model.m_tiny;
-        gridops::nodal(geom, &mut sc.nodes, sc.active, &mut [], stage, m_tiny);
+        gridops::nodal(geom, &mut sc.nodes, sc.active, &mut sc.f1, stage, m_tiny);
     }
 
     /// The loads' ramped tractions at `t0`, and moving conditions' nodes.
@@ -541,10 +649,11 @@ impl<D: Dim> Simulation<D> {
             if v[..D::N].iter().all(Option::is_none) {
                 continue;
             }
+            let sc = &mut self.scratch;
             gridops::hold_momentum::<D>(
-                &mut self.scratch.nodes,
-                &mut [],
-                &[],
+                &mut sc.nodes,
+                &mut sc.f1,
+                &sc.slot_of,
                 &bc.nodes,
                 &v,
                 reextrapolated,
@@ -564,10 +673,11 @@ impl<D: Dim> Simulation<D> {
             if v[..D::N].iter().all(Option::is_none) {
                 continue;
             }
+            let sc = &mut self.scratch;
             gridops::hold_force::<D>(
-                &mut self.scratch.nodes,
-                &mut [],
-                &[],
+                &mut sc.nodes,
+                &mut sc.f1,
+                &sc.slot_of,
                 &bc.nodes,
                 &v,
                 m_tiny,
@@ -587,7 +697,7 @@ impl<D: Dim> Simulation<D> {
             &m.geom,
             &mut sc.nodes,
             sc.active,
-            &mut [],
+            &mut sc.f1,
             &mut sc.plane_sums,
             &m.damping,
             m.m_tiny,
@@ -616,8 +726,15 @@ fn kinetic_energy<D: Dim>(p: &Particles<D>) -> f64 {
         .sum()
 }
 
-/// The pass context of the continuum step (no crack fields).
-fn pass_cx<'a, D: Dim>(m: &'a Model<D>, bounds: &'a [usize], loads: &'a [D::V]) -> PassCx<'a, D> {
+/// The pass context of the step: the model, the strips, the ramped loads and the slot map
+/// of the field-1 nodes (`displacement`: the P2G also scatters mass-weighted displacement).
+fn pass_cx<'a, D: Dim>(
+    m: &'a Model<D>,
+    bounds: &'a [usize],
+    loads: &'a [D::V],
+    slot_of: &'a [u32],
+    displacement: bool,
+) -> PassCx<'a, D> {
     PassCx {
         geom: m.geom,
         shape: m.shape,
@@ -626,8 +743,8 @@ fn pass_cx<'a, D: Dim>(m: &'a Model<D>, bounds: &'a [usize], loads: &'a [D::V]) 
         mats: &m.mats,
         loads,
         bounds,
-        slot_of: &[],
-        displacement: false,
-        fast: PassCx::<D>::fast_ok(m.shape),
+        slot_of,
+        displacement,
+        fast: PassCx::<D>::fast_ok(m.shape) && !m.generic_stencil,
     }
 }

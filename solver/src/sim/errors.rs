@@ -1,17 +1,10 @@
-//! Errors: why a simulation could not be built, why a step failed (with the particle, the
-//! quantity and where), and how a particle pass reports its first failure (`Acc::fail`,
-//! merged in strip order so that the reported particle does not depend on the thread count).
+//! Errors: why a simulation could not be built (the core's), and why a step failed, with the
+//! particle, the quantity and where, in 2D terms (the core's [`fracture_mpm::StepError`]
+//! names positions as 3-vectors; the messages are the same).
 
-use super::Simulation;
-use super::transfer::Acc;
-
-/// Why a simulation could not be built.
-#[derive(Debug, thiserror::Error)]
-pub enum BuildError {
-    /// The thread pool could not be created.
-    #[error("thread pool: {0}")]
-    Threads(String),
-}
+/// Why a simulation could not be built (the core's: the thread pool, or an inconsistent
+/// specification, which a validated scene never gives).
+pub use fracture_mpm::BuildError;
 
 /// Why a step failed: a numerical failure with its diagnosis.
 #[derive(Debug, Clone, PartialEq, thiserror::Error)]
@@ -74,36 +67,56 @@ pub enum StepError {
     },
 }
 
-// The failure kinds of the core's particle passes.
-use fracture_mpm::passes::{FAIL_GRID, FAIL_POSITION, FAIL_VELOCITY};
-
-impl Simulation {
-    /// The step error of a pass's first failure, if any.
-    pub(super) fn check(&self, acc: &Acc) -> Result<(), StepError> {
-        let Some((i, kind)) = acc.fail else {
-            return Ok(());
-        };
-        let k = self.parts.kin[i];
-        let particle = self.parts.cold[i].id as usize;
-        let step = self.steps + 1;
-        Err(match kind {
-            FAIL_GRID => StepError::LeftGrid {
+impl From<fracture_mpm::StepError> for StepError {
+    fn from(e: fracture_mpm::StepError) -> StepError {
+        use fracture_mpm::StepError as Core;
+        match e {
+            Core::NonFinite {
                 step,
                 particle,
-                x: k.x[0],
-                y: k.x[1],
-            },
-            _ => StepError::NonFinite {
+                quantity,
+                position,
+                ..
+            } => StepError::NonFinite {
                 step,
                 particle,
-                quantity: match kind {
-                    FAIL_VELOCITY => "velocity",
-                    FAIL_POSITION => "position",
-                    _ => "stress",
-                },
-                x: k.x[0],
-                y: k.x[1],
+                quantity,
+                x: position[0],
+                y: position[1],
             },
-        })
+            Core::EnergyBlowUp {
+                step,
+                energy,
+                reference,
+            } => StepError::EnergyBlowUp {
+                step,
+                energy,
+                reference,
+            },
+            Core::LeftGrid {
+                step,
+                particle,
+                position,
+                ..
+            } => StepError::LeftGrid {
+                step,
+                particle,
+                x: position[0],
+                y: position[1],
+            },
+            Core::TooManyFields {
+                step,
+                position,
+                fields,
+                max,
+                ..
+            } => StepError::TooManyFields {
+                step,
+                x: position[0],
+                y: position[1],
+                fields,
+                max,
+            },
+        }
     }
 }

@@ -8,29 +8,11 @@ use fracture_api::results::{
 };
 use fracture_api::scene::FieldKind;
 
-use super::Simulation;
+use super::{PassTimes, Simulation, WorkCounters};
 use crate::crack::Cracks;
 use crate::grid::GridGeom;
 use crate::particles::Particles;
 use crate::shape::Weights2;
-
-/// How often the optional phases of a step ran: cheap counters (incremented once per phase
-/// call, outside the particle and node loops) that show what a scene skips.
-#[derive(Debug, Clone, Copy, Default, PartialEq, Eq, serde::Serialize, serde::Deserialize)]
-pub struct WorkCounters {
-    /// Steps taken.
-    pub steps: u64,
-    /// Crack velocity-field assignments (one per step with cracks, §3).
-    pub crack_field_passes: u64,
-    /// Crack-face contact passes (three per step with cracks, §4).
-    pub contact_passes: u64,
-    /// Crack-surface moves (one per step with cracks, §5).
-    pub surface_moves: u64,
-    /// Propagation checks (one per step with cracks, §7).
-    pub propagation_checks: u64,
-    /// J-integral evaluations (per tip, on a history sample or a growth check, §6).
-    pub j_evaluations: u64,
-}
 
 /// Read-only views.
 impl Simulation {
@@ -40,15 +22,15 @@ impl Simulation {
     }
     /// Simulated time (s).
     pub fn time(&self) -> f64 {
-        self.time
+        self.core.state.time
     }
     /// Steps taken.
     pub fn steps_taken(&self) -> u64 {
-        self.steps
+        self.core.state.steps
     }
     /// Δt (s).
     pub fn time_step(&self) -> f64 {
-        self.dt
+        self.core.model.dt
     }
     /// End time (s).
     pub fn end_time(&self) -> f64 {
@@ -56,49 +38,53 @@ impl Simulation {
     }
     /// Steps to reach the end time.
     pub fn total_steps(&self) -> u64 {
-        self.total_steps
+        self.core.model.total_steps
     }
     /// Whether the end time is reached.
     pub fn is_finished(&self) -> bool {
-        self.steps >= self.total_steps
+        self.core.is_finished()
     }
     /// Number of particles.
     pub fn particle_count(&self) -> usize {
-        self.parts.len()
+        self.core.state.parts.len()
     }
     /// Nodes of the grid box.
     pub fn grid_node_count(&self) -> usize {
-        self.geom.nx() * self.geom.ny()
+        self.grid().nx() * self.grid().ny()
     }
     /// Nodes (and extra crack fields) touched by particles in the last step.
     pub fn active_node_count(&self) -> usize {
-        self.active_nodes
+        self.core.scratch.active_nodes
     }
     /// Threads in use.
     pub fn threads(&self) -> usize {
-        self.threads
+        self.core.model.threads
     }
     /// Grid geometry.
     pub fn grid(&self) -> &GridGeom {
-        &self.geom
+        &self.core.model.geom
     }
     /// The particles (sorted by cell; `cold[i].id` is the creation index).
     pub fn particles(&self) -> &Particles {
-        &self.parts
+        &self.core.state.parts
+    }
+    /// Wall time of each pass so far (s): the core's counters of the step's sort, four
+    /// passes and grid work (crack phases included in the grid's).
+    pub fn pass_times(&self) -> PassTimes {
+        self.core.pass_times()
     }
 
     /// Energies now (J per the scene's thickness).
     pub fn energy(&self) -> EnergyRow {
+        let l = self.core.ledger();
         EnergyRow {
-            time: self.time,
-            kinetic: self.ledger.kinetic,
-            strain: self.ledger.strain,
-            external_work: self.ledger.external_work,
-            dissipated: self.ledger.dissipated,
-            total_error: self.ledger.kinetic + self.ledger.strain + self.ledger.dissipated
-                - self.ledger.external_work
-                - self.ledger.initial_total,
-            fracture: self.cracks.as_ref().map_or(0.0, |c| c.zone_work()),
+            time: self.time(),
+            kinetic: l.kinetic,
+            strain: l.strain,
+            external_work: l.external_work,
+            dissipated: l.dissipated,
+            total_error: l.balance(),
+            fracture: self.cracks().map_or(0.0, |c| c.zone_work()),
         }
     }
 
@@ -106,7 +92,7 @@ impl Simulation {
     /// the new surface takes (Σ Γ(v)·Δa·thickness), what the process zones dissipated, and the
     /// rest, which stayed in the body.
     pub fn fracture_energy(&self) -> Option<fracture_api::results::FractureEnergy> {
-        let c = self.cracks.as_ref().filter(|c| c.can_grow())?;
+        let c = self.cracks().filter(|c| c.can_grow())?;
         let (required, above_toughness, new_area) = c.fracture_required();
         let dissipated = c.zone_work();
         Some(fracture_api::results::FractureEnergy {
@@ -120,32 +106,35 @@ impl Simulation {
 
     /// One row per crack tip now (J and K computed here, on demand).
     pub fn crack_tips(&mut self) -> Vec<CrackTipRow> {
-        let Some(mut cr) = self.cracks.take() else {
-            return Vec::new();
-        };
-        let rows = cr.tip_rows(&self.view(), self.time);
-        self.cracks = Some(cr);
-        rows
+        let time = self.time();
+        let c = &mut self.core;
+        let v = super::layer::view(&c.model, &c.state.parts, &c.state.strip_bounds, &c.scratch);
+        match c.state.layer.0.as_mut() {
+            Some(cr) => cr.tip_rows(&v, time),
+            None => Vec::new(),
+        }
     }
 
     /// The cracks, if the scene has any.
     pub fn cracks(&self) -> Option<&Cracks> {
-        self.cracks.as_deref()
+        self.core.state.layer.0.as_deref()
     }
 
     /// How often the optional (crack) phases have run so far.
     pub fn work_counters(&self) -> WorkCounters {
         WorkCounters {
-            steps: self.steps,
-            j_evaluations: self.cracks.as_ref().map_or(0, |c| c.j_evaluations()),
-            ..self.counters
+            steps: self.steps_taken(),
+            j_evaluations: self.cracks().map_or(0, |c| c.j_evaluations()),
+            ..self.core.state.counters
         }
     }
 
     /// Fields sampled at the grid nodes now: mass-weighted averages of particle values
     /// (NaN where no particle reaches a node).
     pub fn snapshot(&self, index: u32, fields: &[FieldKind]) -> Snapshot {
-        let g = self.geom;
+        let g = *self.grid();
+        let shape = self.core.model.shape;
+        let mats = &self.core.model.mats;
         let mut names: Vec<&'static str> = Vec::new();
         for f in fields {
             for c in field_components(*f) {
@@ -160,7 +149,7 @@ impl Simulation {
         let mut acc = vec![0.0f64; nn * nc];
         let thickness = self.scene.thickness;
         let fringe_c = self.scene.output.fringe_constant.unwrap_or(f64::NAN);
-        let p = &self.parts;
+        let p = self.particles();
         let mut vals = vec![0.0f64; nc];
         // Per-particle values too, when the scene asks for them (`output.particles`).
         let mut cloud = self.scene.output.particles.then(|| ParticleSnapshot {
@@ -179,7 +168,7 @@ impl Simulation {
             let s = p.stress[i];
             // Small strain from the stress through the compliance (exact for linear
             // elasticity): ε = [σ − ν(tr σ − σ)]/E per axis, γ = σxy/μ.
-            let mt = &self.mats[p.mech[i].mat as usize];
+            let mt = &mats[p.mech[i].mat as usize];
             let e = [
                 (s[0] - mt.nu * (s[1] + s[3])) / mt.e,
                 (s[1] - mt.nu * (s[0] + s[3])) / mt.e,
@@ -211,7 +200,7 @@ impl Simulation {
                     comp.values.push(*v as f32);
                 }
             }
-            let w = Weights2::new(self.shape, g.xi(&k.x), p.mech[i].lh);
+            let w = Weights2::new(shape, g.xi(&k.x), p.mech[i].lh);
             for a in 0..3 {
                 for b in 0..3 {
                     let sh = w.s(a, b);
@@ -250,14 +239,14 @@ impl Simulation {
             .collect();
         Snapshot {
             index,
-            time: self.time,
+            time: self.time(),
             nx: g.nx() as u32,
             ny: g.ny() as u32,
             origin: g.origin,
             cell_size: g.h,
             fields: fields.iter().map(|f| f.name().to_string()).collect(),
             components,
-            cracks: self.cracks.as_ref().map(|c| c.lines()).unwrap_or_default(),
+            cracks: self.cracks().map(|c| c.lines()).unwrap_or_default(),
             particles: cloud,
             slice: None,
         }
