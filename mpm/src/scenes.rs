@@ -1,7 +1,6 @@
-//! Simulation specifications from scenes: [`spec_2d`] reads a validated 2D scene the way
-//! the 2D solver builds its continuum (`fracture-solver`, `sim/build.rs`: the same lattice,
-//! masses, half-widths, load indices, conditions and time step), so that a `Dim2` run of the
-//! core is the 2D solver's run of an uncracked scene.
+//! Simulation specifications from scenes: [`spec_2d`] reads a validated 2D scene's continuum
+//! (the lattice, masses, half-widths, load indices, conditions and time step); the 2D solver
+//! builds its simulation from it and adds the crack layer (`fracture-solver`, `sim/build.rs`).
 
 use std::sync::Arc;
 

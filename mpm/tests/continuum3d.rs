@@ -450,3 +450,43 @@ fn plane_strain_slab_matches_its_2d_twin() {
     );
     assert!(worst < 0.005, "{worst}");
 }
+
+/// A checkpoint names its dimension and format: a 2D checkpoint given to a 3D simulation,
+/// and a 3D one of format 2 (before the envelope was shared with 2D), are refused with that
+/// said, never read as a state.
+#[test]
+fn checkpoints_of_another_dimension_or_format_are_refused() {
+    use fracture_mpm::CheckpointError;
+    let text = std::fs::read_to_string(format!(
+        "{}/../scenes/impact-bar.json",
+        env!("CARGO_MANIFEST_DIR")
+    ))
+    .expect("scene");
+    let scene = fracture_api::validate::parse_scene(&text).expect("scene");
+    let valid = fracture_api::ValidScene::new(scene).expect("valid");
+    let mut two = Simulation::<fracture_mpm::Dim2>::new(fracture_mpm::scenes::spec_2d(&valid, 1))
+        .expect("2D build");
+    two.step().expect("step");
+    let mut three = small_run(1);
+    three.model.scene_hash = two.model.scene_hash.clone();
+    match three.restore(&two.checkpoint()) {
+        Err(CheckpointError::Mismatch(m)) => {
+            assert!(m.contains("2D checkpoint") && m.contains("3D"), "{m}")
+        }
+        other => panic!("a 2D checkpoint in 3D: {other:?}"),
+    }
+    // The header of a format-2 3D checkpoint: its magic, format and version come first.
+    let old = postcard::to_allocvec(&(*b"MPMCORE\0", 2u32, fracture_api::SOLVER_VERSION, 3u32))
+        .expect("bytes");
+    match three.restore(&old) {
+        Err(e @ CheckpointError::Version { found_format: 2, .. }) => {
+            assert!(e.to_string().contains("format 2"), "{e}")
+        }
+        other => panic!("a format-2 checkpoint: {other:?}"),
+    }
+    // And this simulation's own checkpoint still resumes.
+    let ck = three.checkpoint();
+    let mut again = small_run(1);
+    again.model.scene_hash = three.model.scene_hash.clone();
+    again.restore(&ck).expect("own checkpoint");
+}

@@ -2,7 +2,9 @@
 //! velocity, stress and strain energy density and the energy ledger after some steps, on the
 //! project's uncracked scenes and variants of them (linear shape functions, kinetic and
 //! viscous damping, plane stress, a moving condition, a ramped load), with 1 and 2 threads
-//! and both kernels. This is the gate the 2D solver's move onto the core must keep.
+//! and both kernels. Since the 2D solver's `Simulation` became the core's
+//! `Simulation<Dim2, CrackLayer>`, this checks that its crack layer, absent, adds nothing to
+//! the step (`solver/tests/state_hashes.rs` is the gate against the solver before the move).
 
 use fracture_api::validate::parse_scene;
 use fracture_api::{Scene, ValidScene};

@@ -4,7 +4,8 @@
 //! [`Simulation::step`], and observed through read-only views ([`Simulation::energy`],
 //! [`Simulation::crack_tips`], [`Simulation::snapshot`], [`Simulation::particles`]).
 //! The method is described in `docs/solver.md` (overview: `docs/architecture.md`); modules:
-//! [`shape`] (shape functions), [`grid`] and [`particles`] (data), [`sim`] (the time step),
+//! [`shape`] (shape functions), [`grid`] and [`particles`] (data), [`sim`] (the simulation: the
+//! core's step with the crack layer on its hooks),
 //! [`material`], [`crack`] (crack fields, contact, motion, J, growth), [`tip_mechanics`] (A(v),
 //! Williams fields, kink criteria).
 //!
