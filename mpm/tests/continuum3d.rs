@@ -479,7 +479,11 @@ fn checkpoints_of_another_dimension_or_format_are_refused() {
     let old = postcard::to_allocvec(&(*b"MPMCORE\0", 2u32, fracture_api::SOLVER_VERSION, 3u32))
         .expect("bytes");
     match three.restore(&old) {
-        Err(e @ CheckpointError::Version { found_format: 2, .. }) => {
+        Err(
+            e @ CheckpointError::Version {
+                found_format: 2, ..
+            },
+        ) => {
             assert!(e.to_string().contains("format 2"), "{e}")
         }
         other => panic!("a format-2 checkpoint: {other:?}"),

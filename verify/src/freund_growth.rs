@@ -623,6 +623,144 @@ pub fn run_freund_growth(
 }
 
 // ---------------------------------------------------------------------------------------
+// Freund's step wave with a tip at a prescribed constant speed.
+// ---------------------------------------------------------------------------------------
+
+/// A tip driven at a prescribed speed through Freund's step wave: the energy flux the grid
+/// delivers to a tip of known speed, without the equation of motion's feedback.
+#[derive(Debug, Clone, PartialEq)]
+pub struct ConstantSpeedRun {
+    /// The prescribed speed at the end of the window (m/s).
+    pub speed: f64,
+    /// c_R (m/s).
+    pub c_r: f64,
+    /// Every step after t_c.
+    pub samples: Vec<GrowthSample>,
+    /// The valid window after t_c (s).
+    pub window: f64,
+    /// Median over the second half of the window of J1/(g(v)·G*(t)) (exact g at the tip's
+    /// speed in that step): 1 where the grid delivers LEFM's energy flux.
+    pub ratio: f64,
+    /// Medians over the window's four quarters.
+    pub ratio_quarters: [f64; 4],
+    /// Mean speed over the second half (m/s).
+    pub mean_speed: f64,
+}
+
+/// Freund's growing-crack step-wave scene (`freund_growth`) with the tip driven at
+/// `fraction`·c_R from the wave's arrival ([`run_prescribed_speed`]); the window is the step
+/// wave's for a tip advancing v·t.
+pub fn run_constant_speed(
+    s: &Settings,
+    fraction: f64,
+    reg: &Regularisation,
+    config: SolverConfig,
+) -> Result<ConstantSpeedRun, VerifyError> {
+    let f = freund_growth(s, 0.5, reg)?;
+    let v = fraction * f.speeds.c_r;
+    let dims = [FG_WIDTH, FG_CRACK, FG_ABOVE, FG_BELOW];
+    let window = freund_growth_window(f.speeds.c_l, dims, &|tau| v * tau);
+    run_prescribed_speed(f, window, &|_| v, config)
+}
+
+/// The growing-crack step-wave scene `f` (`freund_growth`, target `target`) with its tip
+/// driven along the exact equation-of-motion history v(t) of the reference: the energy flux
+/// the grid hands a tip that moves exactly as LEFM says it should.
+pub fn run_exact_history(
+    s: &Settings,
+    target: f64,
+    reg: &Regularisation,
+    config: SolverConfig,
+) -> Result<ConstantSpeedRun, VerifyError> {
+    let f = freund_growth(s, target, reg)?;
+    let window = f.window;
+    let r = f.reference.clone();
+    run_prescribed_speed(f, window, &move |t| r.speed(t), config)
+}
+
+/// Run `f` to `window` after t_c with the tip's speed prescribed as `speed(t)` (t after t_c):
+/// before each step the toughness becomes a negligible 10⁻³ J/m² up to that speed and 10¹²
+/// above it, and the speed relaxes within a step (filter time 1 ns), so the equation of
+/// motion pins it; the process zone's traction, set by that toughness, vanishes. For any
+/// speed history of this problem G(t) = g(v)·G*(t), G* = G*₁·t (Freund 1990, §7.4), so
+/// J1/(g(v)G*₁t) is 1 where the grid hands the moving tip LEFM's flux.
+pub fn run_prescribed_speed(
+    mut f: FreundGrowthScene,
+    window: f64,
+    speed: &dyn Fn(f64) -> f64,
+    config: SolverConfig,
+) -> Result<ConstantSpeedRun, VerifyError> {
+    use fracture_api::scene::{Propagation, Toughness};
+    let sp = f.speeds;
+    f.scene.time.end = f.t_c + window;
+    let Some(Propagation::EnergyRelease {
+        direction,
+        speed: law,
+        process_zone,
+        ..
+    }) = f.scene.cracks.first().map(|c| c.propagation.clone())
+    else {
+        return Err(VerifyError::Scene("the scene's crack does not grow".into()));
+    };
+    let set = |sim: &mut Simulation, v: f64| {
+        // A speed of 0 would still let the tip start (a table from v = 0 up): hold it with an
+        // unreachable toughness instead.
+        let toughness = if v > 0.0 {
+            Toughness::Table(vec![[0.0, 1e-3], [v, 1e-3], [v * (1.0 + 1e-9), 1e12]])
+        } else {
+            Toughness::Constant(1e12)
+        };
+        sim.set_crack_propagation(
+            0,
+            Propagation::EnergyRelease {
+                toughness,
+                direction: direction.clone(),
+                speed: law,
+                filter_time: Some(1e-9),
+                process_zone,
+            },
+        );
+    };
+    let mut sim = Simulation::new(&fracture_api::ValidScene::new(f.scene.clone())?, config)?;
+    let mut samples = Vec::new();
+    let dt = sim.time_step();
+    while !sim.is_finished() {
+        let v = speed(sim.time() + dt - f.t_c).max(0.0);
+        set(&mut sim, v);
+        sim.step()?;
+        let t = sim.time() - f.t_c;
+        if t > 0.0 {
+            samples.push(tip_sample(&mut sim, t)?.0);
+        }
+    }
+    let (c_l, c_s, c_r) = (sp.c_l, sp.c_s, sp.c_r);
+    let ratio_in = |a: f64, b: f64| {
+        median(
+            samples
+                .iter()
+                .filter(|x| x.t >= a * window && x.t < b * window && x.speed > 0.0)
+                .map(|x| x.j1 / (freund_g_exact(x.speed, c_l, c_s, c_r) * f.g_star_rate * x.t)),
+        )
+    };
+    let half = 0.5 * window;
+    let mean_speed = (advance_at(&samples, window) - advance_at(&samples, half)) / half;
+    Ok(ConstantSpeedRun {
+        speed: speed(window),
+        c_r,
+        window,
+        ratio: ratio_in(0.5, 1.01),
+        ratio_quarters: [
+            ratio_in(0.0, 0.25),
+            ratio_in(0.25, 0.5),
+            ratio_in(0.5, 0.75),
+            ratio_in(0.75, 1.01),
+        ],
+        mean_speed,
+        samples,
+    })
+}
+
+// ---------------------------------------------------------------------------------------
 // The strip with fixed grips.
 // ---------------------------------------------------------------------------------------
 

@@ -143,7 +143,7 @@ pub struct Crack {
     #[serde(skip)]
     contact: ContactLaw,
     #[serde(skip)]
-    propagation: Propagation,
+    pub(crate) propagation: Propagation,
     /// How J is evaluated (domain or contour).
     #[serde(skip, default = "default_j_method")]
     j_method: JIntegral,

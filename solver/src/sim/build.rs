@@ -28,8 +28,7 @@ impl Simulation {
         );
         // The portable kernel by default: every stored result and test reproduces bit for
         // bit; the FMA build is chosen with `set_kernel` or `fracture bench --kernel`.
-        let core =
-            fracture_mpm::Simulation::with_layer(spec, layer, Box::new(fracture_mpm::Cpu))?;
+        let core = fracture_mpm::Simulation::with_layer(spec, layer, Box::new(fracture_mpm::Cpu))?;
         Ok(Simulation {
             scene: scene.clone(),
             m_snapshot: 1e-9 * m_min,

@@ -120,6 +120,25 @@ impl Simulation {
         self.core.state.layer.0.as_deref()
     }
 
+    /// Replace crack `crack`'s propagation law between steps (verification drives a tip's
+    /// speed history through its toughness table this way; not for users). False when there
+    /// is no such crack.
+    #[doc(hidden)]
+    pub fn set_crack_propagation(
+        &mut self,
+        crack: usize,
+        law: fracture_api::scene::Propagation,
+    ) -> bool {
+        let c = self.core.state.layer.0.as_deref_mut();
+        match c.and_then(|c| c.cracks.get_mut(crack)) {
+            Some(c) => {
+                c.propagation = law;
+                true
+            }
+            None => false,
+        }
+    }
+
     /// How often the optional (crack) phases have run so far.
     pub fn work_counters(&self) -> WorkCounters {
         WorkCounters {
