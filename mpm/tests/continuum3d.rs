@@ -361,17 +361,22 @@ fn threads_and_checkpoints_are_bitwise() {
     assert!(other.restore(&ck).is_err());
 }
 
-/// The impact bar (`scenes/impact-bar.json`, plane strain) as a slab two cells thick with
-/// every node held in z: its energies per unit thickness are the 2D run's.
-#[test]
-fn plane_strain_slab_matches_its_2d_twin() {
+/// The 2D impact bar scene (`scenes/impact-bar.json`, plane strain).
+fn impact_bar() -> fracture_api::ValidScene {
     let text = std::fs::read_to_string(format!(
         "{}/../scenes/impact-bar.json",
         env!("CARGO_MANIFEST_DIR")
     ))
     .expect("scene");
     let scene = fracture_api::validate::parse_scene(&text).expect("scene");
-    let valid = fracture_api::ValidScene::new(scene).expect("valid");
+    fracture_api::ValidScene::new(scene).expect("valid")
+}
+
+/// The impact bar (`scenes/impact-bar.json`, plane strain) as a slab two cells thick with
+/// every node held in z: its energies per unit thickness are the 2D run's.
+#[test]
+fn plane_strain_slab_matches_its_2d_twin() {
+    let valid = impact_bar();
     let s2 = fracture_mpm::scenes::spec_2d(&valid, 2);
     let h = s2.h;
     let layers = 2usize;
@@ -457,13 +462,7 @@ fn plane_strain_slab_matches_its_2d_twin() {
 #[test]
 fn checkpoints_of_another_dimension_or_format_are_refused() {
     use fracture_mpm::CheckpointError;
-    let text = std::fs::read_to_string(format!(
-        "{}/../scenes/impact-bar.json",
-        env!("CARGO_MANIFEST_DIR")
-    ))
-    .expect("scene");
-    let scene = fracture_api::validate::parse_scene(&text).expect("scene");
-    let valid = fracture_api::ValidScene::new(scene).expect("valid");
+    let valid = impact_bar();
     let mut two = Simulation::<fracture_mpm::Dim2>::new(fracture_mpm::scenes::spec_2d(&valid, 1))
         .expect("2D build");
     two.step().expect("step");

@@ -224,29 +224,33 @@ fn a_tip_held_near_rest_receives_the_stationary_flux() {
 
 /// Tips driven at 0.3, 0.6 and 0.85 c_R receive g(v)·G* within 7 % at 0.5 mm.
 #[test]
-#[ignore = "issue 34: J1/(gG*) 0.80 / 0.81 / 0.94 at 0.5 mm (0.72 / 0.60 / 0.45 at 0.25 mm, 0.91 / 1.04 / 0.71 at 1 mm): the domain J of a running tip is not converged (docs/growth.md, \"The flux a running tip receives\")"]
+#[ignore = "issue 34: J1/(gG*) 0.80 / 0.81 / 0.94 at 0.5 mm (0.72 / 0.60 / 0.45 at 0.25 mm, 0.91 / 1.04 / 0.71 at 1 mm): the domain J of a running tip is not converged (docs/running-tip.md)"]
 fn tips_at_constant_speed_receive_freunds_flux() {
-    let st = Settings::at(0.0005);
-    for v in [0.3, 0.6, 0.85] {
-        let ratio = flux_ratio(
-            run_constant_speed(&st, v, &Regularisation::default(), config()),
-            &format!("{v} c_R"),
-        );
-        assert!((ratio - 1.0).abs() < 0.07, "{v} c_R: J1/(gG*) {ratio}");
-    }
+    receive_freunds_flux(run_constant_speed, "constant speed");
 }
 
 /// Tips driven along the exact equation-of-motion histories of the three toughnesses receive
 /// g(v)·G* within 7 % at 0.5 mm.
 #[test]
-#[ignore = "issue 34: J1/(gG*) 1.05 / 0.85 / 1.15 at 0.5 mm, 0.98 / 0.68 / 0.57 at 0.25 mm (docs/growth.md, \"The flux a running tip receives\")"]
+#[ignore = "issue 34: J1/(gG*) 1.05 / 0.85 / 1.15 at 0.5 mm, 0.98 / 0.68 / 0.57 at 0.25 mm (docs/running-tip.md)"]
 fn tips_on_the_exact_histories_receive_freunds_flux() {
+    receive_freunds_flux(run_exact_history, "exact history to");
+}
+
+/// The prescribed-motion runner `run` at 0.3, 0.6 and 0.85 c_R, 0.5 mm: J1/(gG*) within 7 %.
+fn receive_freunds_flux(
+    run: fn(&Settings, f64, &Regularisation, SolverConfig) -> Result<ConstantSpeedRun, VerifyError>,
+    label: &str,
+) {
     let st = Settings::at(0.0005);
-    for target in [0.3, 0.6, 0.85] {
+    for v in [0.3, 0.6, 0.85] {
         let ratio = flux_ratio(
-            run_exact_history(&st, target, &Regularisation::default(), config()),
-            &format!("exact history to {target} c_R"),
+            run(&st, v, &Regularisation::default(), config()),
+            &format!("{label} {v} c_R"),
         );
-        assert!((ratio - 1.0).abs() < 0.07, "{target}: J1/(gG*) {ratio}");
+        assert!(
+            (ratio - 1.0).abs() < 0.07,
+            "{label} {v} c_R: J1/(gG*) {ratio}"
+        );
     }
 }
