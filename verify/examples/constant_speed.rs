@@ -3,8 +3,9 @@
 //! constant speed (`run_constant_speed`) and on the exact equation-of-motion histories
 //! (`run_exact_history`). Prints the tables of `docs/running-tip.md`.
 //!
-//! `cargo run --release -p fracture-verify --example constant_speed -- [H_MM,...] [V/C_R,...] [R_MM]`
-//! (defaults: 1,0.5,0.25 and 0.3,0.6,0.85; R the solver's default ring).
+//! `cargo run --release -p fracture-verify --example constant_speed -- [H_MM,...] [V/C_R,...] [R_MM [ZONE_MM]]`
+//! (defaults: 1,0.5,0.25 and 0.3,0.6,0.85; R and the zone the solver's defaults; `-` keeps a
+//! default).
 #![allow(clippy::print_stdout, missing_docs)]
 
 use fracture_solver::SolverConfig;
@@ -38,12 +39,11 @@ fn main() {
     let mut args = std::env::args().skip(1);
     let hs = list(args.next(), "1,0.5,0.25");
     let vs = list(args.next(), "0.3,0.6,0.85");
+    let mm = |a: Option<String>| a.and_then(|x| x.parse::<f64>().ok()).map(|r| r * 1e-3);
     let reg = Regularisation {
-        j_radius: args
-            .next()
-            .and_then(|x| x.parse::<f64>().ok())
-            .map(|r| r * 1e-3),
-        ..Regularisation::default()
+        j_radius: mm(args.next()),
+        process_zone: mm(args.next()),
+        filter_time: None,
     };
     let cfg = SolverConfig::with_threads(2);
     for (title, exact) in [("constant speed v", false), ("exact history to v", true)] {

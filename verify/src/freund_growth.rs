@@ -678,62 +678,34 @@ pub fn run_exact_history(
     run_prescribed_speed(f, window, &move |t| r.speed(t), config)
 }
 
-/// Run `f` to `window` after t_c with the tip's speed prescribed as `speed(t)` (t after t_c):
-/// before each step the toughness becomes a negligible 10⁻³ J/m² up to that speed and 10¹²
-/// above it, and the speed relaxes within a step (filter time 1 ns), so the equation of
-/// motion pins it; the process zone's traction, set by that toughness, vanishes. For any
-/// speed history of this problem G(t) = g(v)·G*(t), G* = G*₁·t (Freund 1990, §7.4), so
-/// J1/(g(v)G*₁t) is 1 where the grid hands the moving tip LEFM's flux.
+/// Run `f` to `window` after t_c with the tip's speed prescribed as `speed(t)` (t after t_c)
+/// and its process zone taking, per unit new area, the energy LEFM says reaches a tip so
+/// moving: Γ(t) = g(v)·G*₁·t (`Simulation::set_prescribed_motion`). For any speed history of
+/// this problem G(t) = g(v)·G*(t), G* = G*₁·t (Freund 1990, §7.4), so J1/(g(v)G*₁t) is 1
+/// where the grid hands the moving tip LEFM's flux, and the zone then takes what arrives.
 pub fn run_prescribed_speed(
     mut f: FreundGrowthScene,
     window: f64,
     speed: &dyn Fn(f64) -> f64,
     config: SolverConfig,
 ) -> Result<ConstantSpeedRun, VerifyError> {
-    use fracture_api::scene::{Propagation, Toughness};
     let sp = f.speeds;
+    let (c_l, c_s, c_r) = (sp.c_l, sp.c_s, sp.c_r);
     f.scene.time.end = f.t_c + window;
-    let Some(Propagation::EnergyRelease {
-        direction,
-        speed: law,
-        process_zone,
-        ..
-    }) = f.scene.cracks.first().map(|c| c.propagation.clone())
-    else {
-        return Err(VerifyError::Scene("the scene's crack does not grow".into()));
-    };
-    let set = |sim: &mut Simulation, v: f64| {
-        // A speed of 0 would still let the tip start (a table from v = 0 up): hold it with an
-        // unreachable toughness instead.
-        let toughness = if v > 0.0 {
-            Toughness::Table(vec![[0.0, 1e-3], [v, 1e-3], [v * (1.0 + 1e-9), 1e12]])
-        } else {
-            Toughness::Constant(1e12)
-        };
-        sim.set_crack_propagation(
-            0,
-            Propagation::EnergyRelease {
-                toughness,
-                direction: direction.clone(),
-                speed: law,
-                filter_time: Some(1e-9),
-                process_zone,
-            },
-        );
-    };
     let mut sim = Simulation::new(&fracture_api::ValidScene::new(f.scene.clone())?, config)?;
     let mut samples = Vec::new();
     let dt = sim.time_step();
     while !sim.is_finished() {
-        let v = speed(sim.time() + dt - f.t_c).max(0.0);
-        set(&mut sim, v);
+        let t_next = sim.time() + dt - f.t_c;
+        let v = speed(t_next).max(0.0);
+        let flux = freund_g_exact(v, c_l, c_s, c_r) * f.g_star_rate * t_next.max(0.0);
+        sim.set_prescribed_motion(0, Some((v, flux)));
         sim.step()?;
         let t = sim.time() - f.t_c;
         if t > 0.0 {
             samples.push(tip_sample(&mut sim, t)?.0);
         }
     }
-    let (c_l, c_s, c_r) = (sp.c_l, sp.c_s, sp.c_r);
     let ratio_in = |a: f64, b: f64| {
         median(
             samples

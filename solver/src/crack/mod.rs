@@ -143,7 +143,12 @@ pub struct Crack {
     #[serde(skip)]
     contact: ContactLaw,
     #[serde(skip)]
-    pub(crate) propagation: Propagation,
+    propagation: Propagation,
+    /// Verification only: a prescribed (speed m/s, toughness J/m²) that replaces the
+    /// equation of motion's speed and the toughness its process zone takes
+    /// (`Simulation::set_prescribed_motion`); not in checkpoints.
+    #[serde(skip)]
+    pub(crate) prescribed: Option<[f64; 2]>,
     /// How J is evaluated (domain or contour).
     #[serde(skip, default = "default_j_method")]
     j_method: JIntegral,
@@ -434,6 +439,7 @@ impl Cracks {
                     tips,
                     contact: c.contact.clone(),
                     propagation: c.propagation.clone(),
+                    prescribed: None,
                     j_method: JIntegral::default_in(c, scene),
                     ext,
                     interface: false,
@@ -458,6 +464,7 @@ impl Cracks {
                 tips,
                 contact: it.contact.clone(),
                 propagation: Propagation::None,
+                prescribed: None,
                 j_method: JIntegral::Domain {
                     radius: JIntegral::DEFAULT_RADIUS_CELLS * h,
                 },

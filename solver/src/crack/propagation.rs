@@ -232,14 +232,19 @@ impl Cracks {
                                 tip_state.g_filtered = g;
                             }
                         }
-                        let speed = eom_speed(
-                            tip_state.g_filtered,
-                            tip_state.eom_speed,
-                            tf.medium.c_r,
-                            &toughness,
-                            dt,
-                            tau,
-                        );
+                        let prescribed = self.cracks[ci].prescribed;
+                        let tip_state = &mut self.cracks[ci].tips[t];
+                        let speed = match prescribed {
+                            Some([v, _]) => v,
+                            None => eom_speed(
+                                tip_state.g_filtered,
+                                tip_state.eom_speed,
+                                tf.medium.c_r,
+                                &toughness,
+                                dt,
+                                tau,
+                            ),
+                        };
                         tip_state.eom_speed = speed;
                         if speed <= 0.0 {
                             continue;
@@ -248,7 +253,7 @@ impl Cracks {
                             process_zone.unwrap_or(Propagation::DEFAULT_ZONE_FRACTION * radius);
                         // Γ(v), or at the wall that closes it near the speed limit, the
                         // energy that reaches the tip (`WALL_FRACTION`).
-                        let gamma_v = toughness.at(speed);
+                        let gamma_v = prescribed.map_or_else(|| toughness.at(speed), |p| p[1]);
                         let gamma = if at_speed_wall(speed, tf.medium.c_r) {
                             gamma_v.max(tip_state.g_filtered)
                         } else {

@@ -120,19 +120,17 @@ impl Simulation {
         self.core.state.layer.0.as_deref()
     }
 
-    /// Replace crack `crack`'s propagation law between steps (verification drives a tip's
-    /// speed history through its toughness table this way; not for users). False when there
-    /// is no such crack.
+    /// Prescribe crack `crack`'s growth between steps: its growing tips run at `speed` (m/s)
+    /// and their process zones take `toughness` (J/m²) per unit new area, whatever the
+    /// equation of motion would say (`None`: the law again). Verification drives a tip along
+    /// a known motion with the energy LEFM says reaches it this way; not for users, not in
+    /// checkpoints. False when there is no such crack.
     #[doc(hidden)]
-    pub fn set_crack_propagation(
-        &mut self,
-        crack: usize,
-        law: fracture_api::scene::Propagation,
-    ) -> bool {
+    pub fn set_prescribed_motion(&mut self, crack: usize, motion: Option<(f64, f64)>) -> bool {
         let c = self.core.state.layer.0.as_deref_mut();
         match c.and_then(|c| c.cracks.get_mut(crack)) {
             Some(c) => {
-                c.propagation = law;
+                c.prescribed = motion.map(|(v, g)| [v, g]);
                 true
             }
             None => false,
