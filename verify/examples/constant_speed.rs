@@ -3,14 +3,16 @@
 //! constant speed (`run_constant_speed`) and on the exact equation-of-motion histories
 //! (`run_exact_history`). Prints the tables of `docs/running-tip.md`.
 //!
-//! `cargo run --release -p fracture-verify --example constant_speed -- [H_MM,...] [V/C_R,...] [R_MM [ZONE_MM]]`
+//! `cargo run --release -p fracture-verify --example constant_speed -- [H_MM,...] [V/C_R,...] [R_MM [ZONE_MM [SCALE,...]]]`
 //! (defaults: 1,0.5,0.25 and 0.3,0.6,0.85; R and the zone the solver's defaults; `-` keeps a
-//! default).
+//! default). SCALE: the zone takes this many times LEFM's flux (default 1); with several,
+//! only the constant-speed table is printed, one block per scale.
 #![allow(clippy::print_stdout, missing_docs)]
 
 use fracture_solver::SolverConfig;
 use fracture_verify::{
-    ConstantSpeedRun, Regularisation, Settings, VerifyError, run_constant_speed, run_exact_history,
+    ConstantSpeedRun, Regularisation, Settings, VerifyError, run_constant_speed_taking,
+    run_exact_history,
 };
 
 fn list(a: Option<String>, d: &str) -> Vec<f64> {
@@ -45,24 +47,38 @@ fn main() {
         process_zone: mm(args.next()),
         filter_time: None,
     };
+    let scales = list(args.next(), "1");
     let cfg = SolverConfig::with_threads(2);
-    for (title, exact) in [("constant speed v", false), ("exact history to v", true)] {
-        println!("\n{title}, J ring {}:\n", reg.label());
+    let header = || {
         println!(
             "| h (mm) | v/c_R | mean speed, 2nd half (c_R) | J1/(gG*), 2nd half | by quarter | s |"
         );
         println!("| --- | --- | --- | --- | --- | --- |");
+    };
+    for &scale in &scales {
+        println!(
+            "\nconstant speed v, J ring {}, zone taking {scale} × g(v)G*:\n",
+            reg.label()
+        );
+        header();
         for &h in &hs {
             for &v in &vs {
-                let st = Settings::at(h * 1e-3);
                 let t = std::time::Instant::now();
-                let r = if exact {
-                    run_exact_history(&st, v, &reg, cfg)
-                } else {
-                    run_constant_speed(&st, v, &reg, cfg)
-                };
+                let r = run_constant_speed_taking(&Settings::at(h * 1e-3), v, &reg, scale, cfg);
                 row(h, v, r, t.elapsed().as_secs_f64());
             }
+        }
+    }
+    if scales.len() > 1 {
+        return;
+    }
+    println!("\nexact history to v, J ring {}:\n", reg.label());
+    header();
+    for &h in &hs {
+        for &v in &vs {
+            let t = std::time::Instant::now();
+            let r = run_exact_history(&Settings::at(h * 1e-3), v, &reg, cfg);
+            row(h, v, r, t.elapsed().as_secs_f64());
         }
     }
 }

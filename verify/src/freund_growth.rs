@@ -656,11 +656,22 @@ pub fn run_constant_speed(
     reg: &Regularisation,
     config: SolverConfig,
 ) -> Result<ConstantSpeedRun, VerifyError> {
+    run_constant_speed_taking(s, fraction, reg, 1.0, config)
+}
+
+/// [`run_constant_speed`] with the zone taking `zone_scale` times LEFM's flux.
+pub fn run_constant_speed_taking(
+    s: &Settings,
+    fraction: f64,
+    reg: &Regularisation,
+    zone_scale: f64,
+    config: SolverConfig,
+) -> Result<ConstantSpeedRun, VerifyError> {
     let f = freund_growth(s, 0.5, reg)?;
     let v = fraction * f.speeds.c_r;
     let dims = [FG_WIDTH, FG_CRACK, FG_ABOVE, FG_BELOW];
     let window = freund_growth_window(f.speeds.c_l, dims, &|tau| v * tau);
-    run_prescribed_speed(f, window, &|_| v, config)
+    run_prescribed_speed(f, window, &|_| v, zone_scale, config)
 }
 
 /// The growing-crack step-wave scene `f` (`freund_growth`, target `target`) with its tip
@@ -675,18 +686,20 @@ pub fn run_exact_history(
     let f = freund_growth(s, target, reg)?;
     let window = f.window;
     let r = f.reference.clone();
-    run_prescribed_speed(f, window, &move |t| r.speed(t), config)
+    run_prescribed_speed(f, window, &move |t| r.speed(t), 1.0, config)
 }
 
 /// Run `f` to `window` after t_c with the tip's speed prescribed as `speed(t)` (t after t_c)
-/// and its process zone taking, per unit new area, the energy LEFM says reaches a tip so
-/// moving: Γ(t) = g(v)·G*₁·t (`Simulation::set_prescribed_motion`). For any speed history of
+/// and its process zone taking, per unit new area, `zone_scale` times the energy LEFM says
+/// reaches a tip so moving: Γ(t) = zone_scale·g(v)·G*₁·t (`Simulation::set_prescribed_motion`;
+/// 1 in [`run_constant_speed`] and [`run_exact_history`]). For any speed history of
 /// this problem G(t) = g(v)·G*(t), G* = G*₁·t (Freund 1990, §7.4), so J1/(g(v)G*₁t) is 1
 /// where the grid hands the moving tip LEFM's flux, and the zone then takes what arrives.
 pub fn run_prescribed_speed(
     mut f: FreundGrowthScene,
     window: f64,
     speed: &dyn Fn(f64) -> f64,
+    zone_scale: f64,
     config: SolverConfig,
 ) -> Result<ConstantSpeedRun, VerifyError> {
     let sp = f.speeds;
@@ -698,7 +711,7 @@ pub fn run_prescribed_speed(
     while !sim.is_finished() {
         let t_next = sim.time() + dt - f.t_c;
         let v = speed(t_next).max(0.0);
-        let flux = freund_g_exact(v, c_l, c_s, c_r) * f.g_star_rate * t_next.max(0.0);
+        let flux = zone_scale * freund_g_exact(v, c_l, c_s, c_r) * f.g_star_rate * t_next.max(0.0);
         sim.set_prescribed_motion(0, Some((v, flux)));
         sim.step()?;
         let t = sim.time() - f.t_c;
